@@ -1,0 +1,53 @@
+//! The `thermostamp` command line.
+//!
+//! Exit codes: 0 success; 2 bad input (usage, files, values, or a history the material cannot
+//! follow), with a one-line message on standard error.
+
+mod material_point;
+
+use clap::{Parser, Subcommand};
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "thermostamp",
+    version,
+    about = "Thermo-stamping simulation of woven-fabric thermoplastic prepregs (lamination model)",
+    long_about = "Thermo-stamping simulation of woven-fabric-reinforced thermoplastic prepregs with \
+                  the lamination model of Gong et al. (Composite Structures 2018).\n\
+                  Units everywhere: mm, N, s, MPa, tonne/mm^3, °C."
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Drive one material point through a deformation history and print its stress as CSV.
+    MaterialPoint(material_point::Args),
+}
+
+/// Runs the command line and returns the process exit code.
+pub fn main() -> i32 {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            let _ = e.print();
+            return if e.use_stderr() { 2 } else { 0 };
+        }
+    };
+    let result = match cli.command {
+        Command::MaterialPoint(args) => material_point::run(&args),
+    };
+    match result {
+        Ok(()) => 0,
+        Err(e) => {
+            eprintln!("error: {}", one_line(&format!("{e:#}")));
+            2
+        }
+    }
+}
+
+fn one_line(message: &str) -> String {
+    message.split_whitespace().collect::<Vec<_>>().join(" ")
+}

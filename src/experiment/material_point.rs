@@ -1,0 +1,235 @@
+//! Material-point driver: one point of a layer or of the laminate taken through a prescribed
+//! deformation history, like a single-element test.
+//!
+//! Rates come from the history itself: `Cdot` by second-order finite differences in time
+//! (three-point formulas, central inside, one-sided at the ends), so a history whose `F` is
+//! linear in time gets the exact `Cdot`.
+
+use crate::material::stress_free_stretch::find_stress_free_stretch;
+use crate::material::{
+    cauchy_stress, FibreDirections, Laminate, MaterialError, MaterialLaw, MembraneKinematics,
+    PointKinematics, ViscoHyperelasticMatrix,
+};
+use nalgebra::{Matrix2, Matrix3, Matrix3x2};
+use std::ops::{Add, Mul};
+
+/// One instant of a 3D history.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointSample {
+    pub t: f64,
+    pub f: Matrix3<f64>,
+    pub temperature: f64,
+}
+
+/// Response of a layer law at one instant.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointResponse {
+    pub t: f64,
+    /// Second Piola–Kirchhoff stress (MPa).
+    pub s: Matrix3<f64>,
+    /// Cauchy stress (MPa).
+    pub sigma: Matrix3<f64>,
+}
+
+/// One instant of an in-plane (membrane) history.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MembraneSample {
+    pub t: f64,
+    /// In-plane deformation gradient in the sheet's x–y basis.
+    pub f: Matrix2<f64>,
+    pub temperature: f64,
+}
+
+/// Response of the laminate at one instant.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LaminateResponse {
+    pub t: f64,
+    /// 2nd Piola–Kirchhoff membrane resultant per unit reference width (N/mm).
+    pub n: Matrix2<f64>,
+    /// Current thickness (mm).
+    pub thickness: f64,
+}
+
+/// The material failed at sample `index` of the history.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("at t = {t}: {error}")]
+pub struct PointFailure {
+    pub index: usize,
+    pub t: f64,
+    pub error: MaterialError,
+}
+
+/// Time derivative of sampled `values` by three-point finite differences (exact for
+/// quadratics, any spacing). One sample has rate zero; two give the secant.
+pub fn time_derivative<M>(times: &[f64], values: &[M]) -> Vec<M>
+where
+    M: Copy + Add<Output = M> + Mul<f64, Output = M>,
+{
+    let n = values.len();
+    match n {
+        0 => Vec::new(),
+        1 => vec![values[0] * 0.0],
+        2 => {
+            let d = (values[1] + values[0] * -1.0) * (1.0 / (times[1] - times[0]));
+            vec![d, d]
+        }
+        _ => (0..n)
+            .map(|i| {
+                let j = i.clamp(1, n - 2); // centre of the three-point stencil
+                let (t0, t1, t2) = (times[j - 1], times[j], times[j + 1]);
+                let (w0, w1, w2) = lagrange_slope_weights(t0, t1, t2, times[i]);
+                values[j - 1] * w0 + values[j] * w1 + values[j + 1] * w2
+            })
+            .collect(),
+    }
+}
+
+/// Weights of the derivative at `t` of the parabola through `(t0, t1, t2)`.
+fn lagrange_slope_weights(t0: f64, t1: f64, t2: f64, t: f64) -> (f64, f64, f64) {
+    (
+        ((t - t1) + (t - t2)) / ((t0 - t1) * (t0 - t2)),
+        ((t - t0) + (t - t2)) / ((t1 - t0) * (t1 - t2)),
+        ((t - t0) + (t - t1)) / ((t2 - t0) * (t2 - t1)),
+    )
+}
+
+/// Drives one layer law through a 3D deformation history.
+pub fn drive_layer(
+    law: &dyn MaterialLaw,
+    fibres: FibreDirections,
+    history: &[PointSample],
+) -> Result<Vec<PointResponse>, PointFailure> {
+    let times: Vec<f64> = history.iter().map(|s| s.t).collect();
+    let c: Vec<Matrix3<f64>> = history.iter().map(|s| s.f.transpose() * s.f).collect();
+    let c_dot = time_derivative(&times, &c);
+    history
+        .iter()
+        .enumerate()
+        .map(|(i, sample)| {
+            let point = PointKinematics {
+                c: c[i],
+                c_dot: c_dot[i],
+                temperature: sample.temperature,
+                fibres,
+            };
+            let s = law
+                .second_piola_kirchhoff(&point)
+                .map_err(|error| PointFailure {
+                    index: i,
+                    t: sample.t,
+                    error,
+                })?;
+            Ok(PointResponse {
+                t: sample.t,
+                s,
+                sigma: cauchy_stress(&sample.f, &s),
+            })
+        })
+        .collect()
+}
+
+/// Drives the laminate through an in-plane deformation history (plane stress in every layer).
+pub fn drive_laminate(
+    laminate: &Laminate,
+    fibres: FibreDirections,
+    history: &[MembraneSample],
+) -> Result<Vec<LaminateResponse>, PointFailure> {
+    let times: Vec<f64> = history.iter().map(|s| s.t).collect();
+    let c: Vec<Matrix2<f64>> = history.iter().map(|s| s.f.transpose() * s.f).collect();
+    let c_dot = time_derivative(&times, &c);
+    let mut state = laminate.initial_state();
+    let mut previous_t = history.first().map_or(0.0, |s| s.t);
+    history
+        .iter()
+        .enumerate()
+        .map(|(i, sample)| {
+            let kin = MembraneKinematics {
+                c: c[i],
+                c_dot: c_dot[i],
+                temperature: sample.temperature,
+                fibres,
+            };
+            let dt = sample.t - previous_t;
+            previous_t = sample.t;
+            let r = laminate
+                .membrane_response(&kin, dt, &mut state)
+                .map_err(|error| PointFailure {
+                    index: i,
+                    t: sample.t,
+                    error,
+                })?;
+            Ok(LaminateResponse {
+                t: sample.t,
+                n: r.n,
+                thickness: r.thickness,
+            })
+        })
+        .collect()
+}
+
+/// Uniaxial-stress test of the isotropic matrix along x: for each prescribed stretch
+/// `lambda(t)`, the lateral stretch is solved so that `S22 = S33 = 0` (viscous part included,
+/// lateral rate by backward difference). Returns `(lateral stretch, Cauchy sigma11)` per sample.
+pub fn matrix_uniaxial_stress(
+    matrix: &ViscoHyperelasticMatrix,
+    times: &[f64],
+    stretches: &[f64],
+    temperature: f64,
+) -> Result<Vec<(f64, f64)>, PointFailure> {
+    let c11: Vec<f64> = stretches.iter().map(|l| l * l).collect();
+    let c11_dot = time_derivative(times, &c11);
+    let fibres = FibreDirections::default();
+    let mut lateral = 1.0;
+    let mut previous_t = times.first().copied().unwrap_or(0.0);
+    let mut out = Vec::with_capacity(times.len());
+    for (i, (&t, &stretch)) in times.iter().zip(stretches).enumerate() {
+        let fail = |error| PointFailure { index: i, t, error };
+        let dt = t - previous_t;
+        let previous_lateral = lateral;
+        let point_at = |mu: f64| {
+            let mu_dot = if dt > 0.0 {
+                (mu - previous_lateral) / dt
+            } else {
+                0.0
+            };
+            PointKinematics {
+                c: Matrix3::from_diagonal(&nalgebra::Vector3::new(c11[i], mu * mu, mu * mu)),
+                c_dot: Matrix3::from_diagonal(&nalgebra::Vector3::new(
+                    c11_dot[i],
+                    2.0 * mu * mu_dot,
+                    2.0 * mu * mu_dot,
+                )),
+                temperature,
+                fibres,
+            }
+        };
+        let s22 = |mu: f64| Ok(matrix.second_piola_kirchhoff(&point_at(mu))?[(1, 1)]);
+        let scale = matrix
+            .second_piola_kirchhoff(&point_at(lateral))
+            .map_err(fail)?
+            .amax();
+        lateral = find_stress_free_stretch(s22, lateral, 1e-13 * scale)
+            .map_err(fail)?
+            .map_err(|nc| {
+                fail(MaterialError::PlaneStressNotConverged {
+                    layer: 0,
+                    law: "matrix",
+                    iterations: nc.iterations,
+                    lambda3: nc.stretch,
+                    s33: nc.residual,
+                })
+            })?;
+        let s = matrix
+            .second_piola_kirchhoff(&point_at(lateral))
+            .map_err(fail)?;
+        let f = Matrix3::from_diagonal(&nalgebra::Vector3::new(stretch, lateral, lateral));
+        out.push((lateral, cauchy_stress(&f, &s)[(0, 0)]));
+        previous_t = t;
+    }
+    Ok(out)
+}
+
+/// Embeds an in-plane deformation gradient in 3D (x–y plane stays at z = 0).
+pub fn in_plane(f: &Matrix2<f64>) -> Matrix3x2<f64> {
+    Matrix3x2::new(f[(0, 0)], f[(0, 1)], f[(1, 0)], f[(1, 1)], 0.0, 0.0)
+}

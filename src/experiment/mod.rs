@@ -1,0 +1,3 @@
+//! Virtual material tests: deformation histories imposed on the material models.
+
+pub mod material_point;

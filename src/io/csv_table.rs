@@ -1,0 +1,177 @@
+//! Numeric CSV tables with named columns: a header line, then one row of numbers per line.
+//! Blank lines and lines starting with `#` are comments. Every error names the file and line.
+
+use super::InputError;
+use std::io::Write;
+use std::path::Path;
+
+/// A numeric table whose columns are exactly the ones asked for, in that order.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CsvTable {
+    pub origin: String,
+    /// Line number (1-based) of each row in the file.
+    pub lines: Vec<usize>,
+    /// `rows[i][j]`: row `i`, the `j`-th of the requested columns.
+    pub rows: Vec<Vec<f64>>,
+}
+
+/// Reads the table at `path`, which must have exactly the columns `columns` (in any order).
+pub fn read_csv_table(path: &Path, columns: &[&str]) -> Result<CsvTable, InputError> {
+    let origin = path.display().to_string();
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| InputError::in_file(&origin, format!("cannot read the file: {e}")))?;
+    parse_csv_table(&text, &origin, columns)
+}
+
+/// Parses CSV `text`; `origin` names it in messages.
+pub fn parse_csv_table(text: &str, origin: &str, columns: &[&str]) -> Result<CsvTable, InputError> {
+    let mut content = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| (i + 1, l.trim()))
+        .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'));
+    let (header_line, header) = content
+        .next()
+        .ok_or_else(|| InputError::in_file(origin, "the file has no header line and no data"))?;
+    let order = column_order(header, header_line, origin, columns)?;
+    let mut table = CsvTable {
+        origin: origin.to_string(),
+        lines: Vec::new(),
+        rows: Vec::new(),
+    };
+    for (line, text) in content {
+        let cells: Vec<&str> = text.split(',').map(str::trim).collect();
+        if cells.len() != columns.len() {
+            return Err(InputError::at_line(
+                origin,
+                line,
+                format!("{} cells, the header has {}", cells.len(), columns.len()),
+            ));
+        }
+        let row = order
+            .iter()
+            .zip(columns)
+            .map(|(&j, name)| parse_number(cells[j], name, origin, line))
+            .collect::<Result<Vec<f64>, _>>()?;
+        table.lines.push(line);
+        table.rows.push(row);
+    }
+    if table.rows.is_empty() {
+        return Err(InputError::in_file(
+            origin,
+            "the table has a header but no data rows",
+        ));
+    }
+    Ok(table)
+}
+
+/// For each requested column, its position in the header.
+fn column_order(
+    header: &str,
+    line: usize,
+    origin: &str,
+    columns: &[&str],
+) -> Result<Vec<usize>, InputError> {
+    let names: Vec<&str> = header.split(',').map(str::trim).collect();
+    let expected = columns.join(",");
+    if let Some(unknown) = names.iter().find(|n| !columns.contains(n)) {
+        return Err(InputError::at_line(
+            origin,
+            line,
+            format!("unexpected column '{unknown}' (expected columns: {expected})"),
+        ));
+    }
+    columns
+        .iter()
+        .map(|c| {
+            let mut at = names
+                .iter()
+                .enumerate()
+                .filter(|(_, n)| *n == c)
+                .map(|(i, _)| i);
+            match (at.next(), at.next()) {
+                (Some(i), None) => Ok(i),
+                (None, _) => Err(format!(
+                    "missing column '{c}' (expected columns: {expected})"
+                )),
+                (Some(_), Some(_)) => Err(format!("column '{c}' appears twice")),
+            }
+            .map_err(|m| InputError::at_line(origin, line, m))
+        })
+        .collect()
+}
+
+fn parse_number(cell: &str, column: &str, origin: &str, line: usize) -> Result<f64, InputError> {
+    match cell.parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        _ => Err(InputError::at_line(
+            origin,
+            line,
+            format!("column '{column}': '{cell}' is not a finite number"),
+        )),
+    }
+}
+
+/// Writes a header and rows of numbers as CSV, with 10 significant digits.
+pub fn write_csv<W: Write, R: AsRef<[f64]>>(
+    out: &mut W,
+    header: &[&str],
+    rows: impl IntoIterator<Item = R>,
+) -> std::io::Result<()> {
+    writeln!(out, "{}", header.join(","))?;
+    for row in rows {
+        let cells: Vec<String> = row
+            .as_ref()
+            .iter()
+            .map(|&v| significant_digits(v))
+            .collect();
+        writeln!(out, "{}", cells.join(","))?;
+    }
+    out.flush()
+}
+
+/// `v` rounded to 10 significant digits, in its shortest exponent form (`1.8e0`, `-2.5e-7`).
+fn significant_digits(v: f64) -> String {
+    let rounded: f64 = format!("{v:.9e}").parse().unwrap_or(v);
+    format!("{rounded:e}")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reads_columns_in_any_order_and_skips_comments() {
+        let text = "# a comment\nb, a\n\n2.5, 1\n# another\n4,3e-1\n";
+        let t = parse_csv_table(text, "h.csv", &["a", "b"]).unwrap();
+        assert_eq!(t.rows, vec![vec![1.0, 2.5], vec![0.3, 4.0]]);
+        assert_eq!(t.lines, vec![4, 6]);
+    }
+
+    #[test]
+    fn errors_name_line_and_column() {
+        let e = parse_csv_table("a,b\n1,2\n3,x\n", "h.csv", &["a", "b"]).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "h.csv: line 3: column 'b': 'x' is not a finite number"
+        );
+        let e = parse_csv_table("a\n1\n", "h.csv", &["a", "b"]).unwrap_err();
+        assert!(e.to_string().contains("missing column 'b'"), "{e}");
+        let e = parse_csv_table("a,b,c\n1,2,3\n", "h.csv", &["a", "b"]).unwrap_err();
+        assert!(e.to_string().contains("unexpected column 'c'"), "{e}");
+        let e = parse_csv_table("a,b\n1,2,3\n", "h.csv", &["a", "b"]).unwrap_err();
+        assert_eq!(e.line, Some(2));
+        let e = parse_csv_table("a,b\n1,nan\n", "h.csv", &["a", "b"]).unwrap_err();
+        assert_eq!(e.line, Some(2));
+        assert!(parse_csv_table("# only\n", "h.csv", &["a"]).is_err());
+        assert!(parse_csv_table("a\n", "h.csv", &["a"]).is_err());
+    }
+
+    #[test]
+    fn written_values_read_back() {
+        let mut out = Vec::new();
+        write_csv(&mut out, &["x", "y"], [[1.0, -2.5e-7], [3.25, 1e6]]).unwrap();
+        let t = parse_csv_table(std::str::from_utf8(&out).unwrap(), "o.csv", &["x", "y"]).unwrap();
+        assert_eq!(t.rows, vec![vec![1.0, -2.5e-7], vec![3.25, 1e6]]);
+    }
+}

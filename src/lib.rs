@@ -1,0 +1,14 @@
+//! thermostamp — thermo-stamping simulation of woven-fabric-reinforced thermoplastic prepregs
+//! with the lamination model of Gong et al., Composite Structures 2018 (see `MODEL.md`).
+//!
+//! Units everywhere: mm, N, s, MPa, tonne/mm^3, °C.
+//!
+//! - [`material`]: constitutive laws of the layers and the A:B:A laminate, material cards;
+//! - [`experiment`]: virtual material tests, starting with the material-point driver;
+//! - [`io`]: readers and writers of the files users hand in and get back;
+//! - [`cli`]: the `thermostamp` command line.
+
+pub mod cli;
+pub mod experiment;
+pub mod io;
+pub mod material;

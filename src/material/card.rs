@@ -1,0 +1,379 @@
+//! Material cards: a TOML file describing one prepreg ply (layers, matrix, fabric), read and
+//! checked into ready-to-use laws. Unknown keys and out-of-range values are errors that name
+//! the file and the key.
+
+use super::fabric::{ShearInteraction, YarnTension};
+use super::{Laminate, Layer, MaterialLaw, TemperatureTable, ViscoHyperelasticMatrix, WovenFabric};
+use serde::Deserialize;
+use std::path::Path;
+use std::sync::Arc;
+
+/// A material card that was read and checked.
+#[derive(Clone, Debug)]
+pub struct MaterialCard {
+    pub name: String,
+    /// Density of the ply, tonne/mm^3.
+    pub density: f64,
+    pub matrix: Arc<ViscoHyperelasticMatrix>,
+    pub fabric: Arc<WovenFabric>,
+    pub laminate: Laminate,
+}
+
+/// What is wrong with a material card, and in which file.
+#[derive(Debug, thiserror::Error)]
+#[error("{origin}: {message}")]
+pub struct CardError {
+    pub origin: String,
+    pub message: String,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CardFile {
+    name: String,
+    density: f64,
+    layers: LayersSection,
+    matrix: MatrixSection,
+    fabric: FabricSection,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LayersSection {
+    matrix_thickness: f64,
+    fabric_thickness: f64,
+    #[serde(default = "default_stack")]
+    stack: Vec<LayerKind>,
+}
+
+#[derive(Deserialize, Clone, Copy, PartialEq, Eq, Debug)]
+#[serde(rename_all = "lowercase")]
+enum LayerKind {
+    Matrix,
+    Fabric,
+}
+
+fn default_stack() -> Vec<LayerKind> {
+    vec![LayerKind::Matrix, LayerKind::Fabric, LayerKind::Matrix]
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MatrixSection {
+    temperature: Vec<f64>,
+    c10: Vec<f64>,
+    d1: Vec<f64>,
+    eta1: Vec<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FabricSection {
+    warp_tension: Vec<f64>,
+    weft_tension: Vec<f64>,
+    #[serde(default = "default_compression_fraction")]
+    compression_fraction: f64,
+    shear: Vec<f64>,
+}
+
+/// MODEL.md §3: yarn compression stiffness defaults to 1e-3 of the initial tensile one.
+fn default_compression_fraction() -> f64 {
+    1e-3
+}
+
+/// Largest shear angle at which the shear energy must still be non-decreasing (degrees).
+const SHEAR_CHECK_LIMIT_DEG: f64 = 75.0;
+/// Yarn strain up to which the tension must stay non-negative.
+const TENSION_CHECK_STRAIN: f64 = 0.05;
+
+impl MaterialCard {
+    /// Reads and checks the card at `path`.
+    pub fn load(path: &Path) -> Result<Self, CardError> {
+        let origin = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|e| CardError {
+            origin: origin.clone(),
+            message: format!("cannot read the material card: {e}"),
+        })?;
+        Self::from_toml(&text, &origin)
+    }
+
+    /// Reads and checks a card from TOML text; `origin` names it in messages.
+    pub fn from_toml(text: &str, origin: &str) -> Result<Self, CardError> {
+        let error = |message: String| CardError {
+            origin: origin.to_string(),
+            message,
+        };
+        let file: CardFile =
+            toml::from_str(text).map_err(|e| error(describe_toml_error(text, &e)))?;
+        file.check().map_err(error)
+    }
+}
+
+/// One line: `line L, column C: message`.
+fn describe_toml_error(text: &str, e: &toml::de::Error) -> String {
+    let message = e.message().trim().replace('\n', " ");
+    match e.span() {
+        Some(span) => {
+            let before = &text[..span.start.min(text.len())];
+            let line = before.matches('\n').count() + 1;
+            let column = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
+            format!("line {line}, column {column}: {message}")
+        }
+        None => message,
+    }
+}
+
+fn positive(key: &str, value: f64) -> Result<f64, String> {
+    if value.is_finite() && value > 0.0 {
+        Ok(value)
+    } else {
+        Err(format!("{key} = {value}: must be a positive number"))
+    }
+}
+
+fn all_finite(key: &str, values: &[f64]) -> Result<(), String> {
+    match values.iter().position(|v| !v.is_finite()) {
+        Some(i) => Err(format!("{key}[{i}] is not a finite number")),
+        None => Ok(()),
+    }
+}
+
+impl CardFile {
+    fn check(self) -> Result<MaterialCard, String> {
+        if self.name.trim().is_empty() {
+            return Err("name must not be empty".into());
+        }
+        let density = positive("density", self.density)?;
+        let matrix = Arc::new(self.matrix.check()?);
+        let fabric = Arc::new(self.fabric.check()?);
+        let laminate = self.layers.check(matrix.clone(), fabric.clone())?;
+        Ok(MaterialCard {
+            name: self.name,
+            density,
+            matrix,
+            fabric,
+            laminate,
+        })
+    }
+}
+
+impl LayersSection {
+    fn check(
+        &self,
+        matrix: Arc<ViscoHyperelasticMatrix>,
+        fabric: Arc<WovenFabric>,
+    ) -> Result<Laminate, String> {
+        let t_a = positive("[layers] matrix_thickness", self.matrix_thickness)?;
+        let t_b = positive("[layers] fabric_thickness", self.fabric_thickness)?;
+        if !self.stack.contains(&LayerKind::Fabric) {
+            return Err("[layers] stack must contain at least one \"fabric\" layer".into());
+        }
+        let layers = self
+            .stack
+            .iter()
+            .map(|kind| match kind {
+                LayerKind::Matrix => Layer {
+                    law: matrix.clone() as Arc<dyn MaterialLaw>,
+                    thickness: t_a,
+                },
+                LayerKind::Fabric => Layer {
+                    law: fabric.clone() as Arc<dyn MaterialLaw>,
+                    thickness: t_b,
+                },
+            })
+            .collect();
+        Laminate::new(layers).map_err(|e| format!("[layers]: {e}"))
+    }
+}
+
+impl MatrixSection {
+    fn check(self) -> Result<ViscoHyperelasticMatrix, String> {
+        let table = |key: &str, values: Vec<f64>| {
+            TemperatureTable::new(key, self.temperature.clone(), values)
+                .map_err(|e| format!("[matrix]: {e}"))
+        };
+        let c10 = table("c10", self.c10)?;
+        let d1 = table("d1", self.d1)?;
+        let eta1 = table("eta1", self.eta1)?;
+        for (key, values, allow_zero) in [
+            ("c10", c10.values(), false),
+            ("d1", d1.values(), false),
+            ("eta1", eta1.values(), true),
+        ] {
+            if let Some(i) = values
+                .iter()
+                .position(|&v| v < 0.0 || (v == 0.0 && !allow_zero))
+            {
+                let need = if allow_zero { ">= 0" } else { "> 0" };
+                return Err(format!(
+                    "[matrix] {key}[{i}] = {}: must be {need}",
+                    values[i]
+                ));
+            }
+        }
+        Ok(ViscoHyperelasticMatrix::new(c10, d1, eta1))
+    }
+}
+
+impl FabricSection {
+    fn check(self) -> Result<WovenFabric, String> {
+        let f = self.compression_fraction;
+        if !(f.is_finite() && (0.0..=1.0).contains(&f)) {
+            return Err(format!(
+                "[fabric] compression_fraction = {f}: must lie in [0, 1]"
+            ));
+        }
+        let warp = yarn("[fabric] warp_tension", self.warp_tension, f)?;
+        let weft = yarn("[fabric] weft_tension", self.weft_tension, f)?;
+        all_finite("[fabric] shear", &self.shear)?;
+        if self.shear.is_empty() {
+            return Err("[fabric] shear needs at least one coefficient c1".into());
+        }
+        let shear = ShearInteraction::new(self.shear);
+        // A falling shear energy would be a negative shear stiffness: unstable in any solver.
+        for deg in (0..=SHEAR_CHECK_LIMIT_DEG as u32).map(f64::from) {
+            let i10 = deg.to_radians().sin().powi(2);
+            if shear.derivative(i10) < 0.0 {
+                return Err(format!(
+                    "[fabric] shear: the shear energy decreases at {deg}° of shear \
+                     (W_s'(I10) < 0); the coefficients give a negative shear stiffness"
+                ));
+            }
+        }
+        Ok(WovenFabric::new(warp, weft, shear))
+    }
+}
+
+fn yarn(
+    key: &str,
+    coefficients: Vec<f64>,
+    compression_fraction: f64,
+) -> Result<YarnTension, String> {
+    all_finite(key, &coefficients)?;
+    match coefficients.first() {
+        None => return Err(format!("{key} needs at least one coefficient A2")),
+        Some(&a2) if a2 <= 0.0 => {
+            return Err(format!(
+                "{key}[0] (A2) = {a2}: must be > 0, it is the initial tensile modulus of the yarns"
+            ))
+        }
+        _ => {}
+    }
+    let tension = YarnTension::new(coefficients, compression_fraction);
+    for i in 1..=50 {
+        let stretch = 1.0 + TENSION_CHECK_STRAIN * f64::from(i) / 50.0;
+        if tension.tension(stretch) < 0.0 {
+            return Err(format!(
+                "{key}: the yarn tension is negative at {:.1} % strain; check the signs of A_k",
+                100.0 * (stretch - 1.0)
+            ));
+        }
+    }
+    Ok(tension)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const VALID: &str = r#"
+name = "test"
+density = 1.5e-9
+[layers]
+matrix_thickness = 0.04
+fabric_thickness = 0.23
+[matrix]
+temperature = [280.0, 320.0]
+c10 = [0.05, 0.02]
+d1 = [1e-3, 1e-3]
+eta1 = [1e-3, 5e-4]
+[fabric]
+warp_tension = [4e4, 2e6]
+weft_tension = [4e4, 2e6]
+shear = [0.25, 0.0, 2.0]
+"#;
+
+    fn error_of(text: &str) -> String {
+        MaterialCard::from_toml(text, "card.toml")
+            .unwrap_err()
+            .to_string()
+    }
+
+    #[test]
+    fn reads_a_valid_card_into_an_aba_laminate() {
+        let card = MaterialCard::from_toml(VALID, "card.toml").unwrap();
+        let names: Vec<_> = card
+            .laminate
+            .layers()
+            .iter()
+            .map(|l| l.law.name())
+            .collect();
+        assert_eq!(names, ["matrix", "fabric", "matrix"]);
+        assert!((card.laminate.reference_thickness() - 0.31).abs() < 1e-12);
+        assert_eq!(card.fabric.warp.tension(1.0), 0.0);
+    }
+
+    #[test]
+    fn unknown_key_is_named_with_its_line() {
+        let text = VALID.replace("shear = [", "sheer = 1\nshear = [");
+        let e = error_of(&text);
+        assert!(e.starts_with("card.toml: line 17"), "{e}");
+        assert!(e.contains("sheer"), "{e}");
+        assert!(!e.contains('\n'), "{e}");
+    }
+
+    #[test]
+    fn bad_values_name_their_key() {
+        let cases = [
+            (
+                "matrix_thickness = 0.04",
+                "matrix_thickness = -0.04",
+                "[layers] matrix_thickness",
+            ),
+            ("c10 = [0.05, 0.02]", "c10 = [0.05]", "c10 has 1 values"),
+            ("d1 = [1e-3, 1e-3]", "d1 = [1e-3, 0.0]", "[matrix] d1[1]"),
+            (
+                "warp_tension = [4e4, 2e6]",
+                "warp_tension = [0.0, 2e6]",
+                "warp_tension[0] (A2)",
+            ),
+            (
+                "weft_tension = [4e4, 2e6]",
+                "weft_tension = [4e4, -1e8]",
+                "weft_tension: the yarn tension is negative",
+            ),
+            (
+                "shear = [0.25, 0.0, 2.0]",
+                "shear = [0.25, -1.0]",
+                "shear energy decreases",
+            ),
+            ("density = 1.5e-9", "density = 0.0", "density = 0"),
+            (
+                "temperature = [280.0, 320.0]",
+                "temperature = [320.0, 280.0]",
+                "increase strictly",
+            ),
+        ];
+        for (from, to, expected) in cases {
+            let e = error_of(&VALID.replace(from, to));
+            assert!(e.contains(expected), "{to}: {e}");
+        }
+    }
+
+    #[test]
+    fn missing_section_is_an_error() {
+        let text = VALID.split("[fabric]").next().unwrap();
+        assert!(error_of(text).contains("fabric"));
+    }
+
+    #[test]
+    fn custom_stack_of_layers() {
+        let text = VALID.replace(
+            "fabric_thickness = 0.23",
+            "fabric_thickness = 0.23\nstack = [\"matrix\", \"fabric\", \"matrix\", \"fabric\", \"matrix\"]",
+        );
+        let card = MaterialCard::from_toml(&text, "card.toml").unwrap();
+        assert_eq!(card.laminate.layers().len(), 5);
+        assert!((card.laminate.reference_thickness() - 0.58).abs() < 1e-12);
+    }
+}

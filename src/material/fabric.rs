@@ -1,0 +1,211 @@
+//! Layer B: impregnated woven fabric, anisotropic hyperelastic with fibre–fibre–matrix
+//! interaction (MODEL.md §3; seed Eqs. (10)–(11)).
+//!
+//! `W = W_t,warp(I4) + W_t,weft(I6) + W_s(I10)`, energy per unit reference volume of layer B:
+//! - yarn tension `W_t(I) = sum_k (A_k / k) (sqrt(I) - 1)^k`, `k = 2..n`, for `sqrt(I) > 1`;
+//!   in compression `W_t = (f A_2 / 2) (sqrt(I) - 1)^2`, a fraction `f` of the initial tensile
+//!   stiffness `A_2`, so that yarns buckle instead of carrying compression;
+//! - in-plane shear `W_s(I10) = sum_k c_k I10^k`, `k = 1..m`, `I10 = I8^2 / (I4 I6) = sin^2(gamma)`.
+//!
+//! State variables: none (hyperelastic). The fibre directions come with each point.
+
+use super::{
+    ensure_finite, FibreDirections, MaterialError, MaterialLaw, PointKinematics, ThicknessRule,
+};
+use nalgebra::{Matrix3, Vector3};
+
+/// Tension energy of one yarn family as a function of its stretch.
+#[derive(Clone, Debug, PartialEq)]
+pub struct YarnTension {
+    /// `A_2, A_3, ...` in MPa.
+    coefficients: Vec<f64>,
+    /// Stiffness in compression, `f A_2` (MPa).
+    compression_stiffness: f64,
+}
+
+impl YarnTension {
+    /// `coefficients` are `A_2, A_3, ...` (MPa); `compression_fraction` is `f`.
+    pub fn new(coefficients: Vec<f64>, compression_fraction: f64) -> Self {
+        let a2 = coefficients.first().copied().unwrap_or(0.0);
+        Self {
+            coefficients,
+            compression_stiffness: compression_fraction * a2,
+        }
+    }
+
+    /// `W_t` as a function of the yarn stretch `lambda = sqrt(I)`.
+    pub fn energy(&self, stretch: f64) -> f64 {
+        let e = stretch - 1.0;
+        if e <= 0.0 {
+            return 0.5 * self.compression_stiffness * e * e;
+        }
+        self.coefficients
+            .iter()
+            .enumerate()
+            .map(|(i, a)| {
+                let k = (i + 2) as i32;
+                a / k as f64 * e.powi(k)
+            })
+            .sum()
+    }
+
+    /// `dW_t/dlambda`: the yarn tension per unit reference area of the layer (MPa).
+    pub fn tension(&self, stretch: f64) -> f64 {
+        let e = stretch - 1.0;
+        if e <= 0.0 {
+            return self.compression_stiffness * e;
+        }
+        self.coefficients
+            .iter()
+            .enumerate()
+            .map(|(i, a)| a * e.powi(i as i32 + 1))
+            .sum()
+    }
+
+    /// `dW_t/dI = (dW_t/dlambda) / (2 lambda)` with `lambda = sqrt(I)`.
+    fn derivative_wrt_invariant(&self, invariant: f64) -> f64 {
+        let stretch = invariant.sqrt();
+        self.tension(stretch) / (2.0 * stretch)
+    }
+}
+
+/// Fibre–fibre–matrix interaction energy `W_s(I10) = sum_k c_k I10^k`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ShearInteraction {
+    /// `c_1, c_2, ...` in MPa.
+    coefficients: Vec<f64>,
+}
+
+impl ShearInteraction {
+    pub fn new(coefficients: Vec<f64>) -> Self {
+        Self { coefficients }
+    }
+
+    pub fn energy(&self, i10: f64) -> f64 {
+        self.coefficients
+            .iter()
+            .enumerate()
+            .map(|(i, c)| c * i10.powi(i as i32 + 1))
+            .sum()
+    }
+
+    /// `W_s'(I10) = sum_k k c_k I10^(k-1)`.
+    pub fn derivative(&self, i10: f64) -> f64 {
+        self.coefficients
+            .iter()
+            .enumerate()
+            .map(|(i, c)| (i + 1) as f64 * c * i10.powi(i as i32))
+            .sum()
+    }
+
+    /// Normalised shear force of a pure-shear (trellis) deformation of a layer of thickness
+    /// `thickness`, MODEL.md §5: `F_sh = 2 t sin(gamma) W_s'(sin^2 gamma)` (N/mm).
+    pub fn normalised_shear_force(&self, thickness: f64, gamma: f64) -> f64 {
+        let s = gamma.sin();
+        2.0 * thickness * s * self.derivative(s * s)
+    }
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct WovenFabric {
+    pub warp: YarnTension,
+    pub weft: YarnTension,
+    pub shear: ShearInteraction,
+}
+
+/// Fibre invariants of seed Eq. (11) used by the energy.
+#[derive(Clone, Copy, Debug)]
+struct FibreInvariants {
+    i4: f64,
+    i6: f64,
+    i8: f64,
+}
+
+impl FibreInvariants {
+    fn of(c: &Matrix3<f64>, fibres: &FibreDirections) -> Result<Self, MaterialError> {
+        let (a0, b0) = (&fibres.warp, &fibres.weft);
+        let i4 = a0.dot(&(c * a0));
+        let i6 = b0.dot(&(c * b0));
+        if i4.is_nan() || i4 <= 0.0 {
+            return Err(MaterialError::DegenerateFibre {
+                invariant: "I4",
+                value: i4,
+            });
+        }
+        if i6.is_nan() || i6 <= 0.0 {
+            return Err(MaterialError::DegenerateFibre {
+                invariant: "I6",
+                value: i6,
+            });
+        }
+        Ok(Self {
+            i4,
+            i6,
+            i8: a0.dot(&(c * b0)),
+        })
+    }
+
+    /// `I10 = I8^2 / (I4 I6) = cos^2(theta) = sin^2(gamma)` (MODEL.md §3).
+    fn i10(&self) -> f64 {
+        self.i8 * self.i8 / (self.i4 * self.i6)
+    }
+}
+
+/// Shear angle `gamma = pi/2 - theta`, `cos(theta) = I8 / sqrt(I4 I6)` (MODEL.md §1), radians.
+///
+/// Positive when the yarns close up from 90°.
+pub fn shear_angle(c: &Matrix3<f64>, fibres: &FibreDirections) -> f64 {
+    let a0 = &fibres.warp;
+    let b0 = &fibres.weft;
+    let cos_theta = a0.dot(&(c * b0)) / (a0.dot(&(c * a0)) * b0.dot(&(c * b0))).sqrt();
+    std::f64::consts::FRAC_PI_2 - cos_theta.clamp(-1.0, 1.0).acos()
+}
+
+fn dyad(u: &Vector3<f64>, v: &Vector3<f64>) -> Matrix3<f64> {
+    u * v.transpose()
+}
+
+impl WovenFabric {
+    pub fn new(warp: YarnTension, weft: YarnTension, shear: ShearInteraction) -> Self {
+        Self { warp, weft, shear }
+    }
+}
+
+impl MaterialLaw for WovenFabric {
+    fn name(&self) -> &'static str {
+        "fabric"
+    }
+
+    fn thickness_rule(&self) -> ThicknessRule {
+        ThicknessRule::VolumeConserving
+    }
+
+    /// MODEL.md §3: `S = 2 W4 a0(x)a0 + 2 W6 b0(x)b0 + W8 (a0(x)b0 + b0(x)a0)`.
+    fn second_piola_kirchhoff(
+        &self,
+        point: &PointKinematics,
+    ) -> Result<Matrix3<f64>, MaterialError> {
+        ensure_finite(self.name(), point)?;
+        let inv = FibreInvariants::of(&point.c, &point.fibres)?;
+        let ws = self.shear.derivative(inv.i10());
+        let i8_sq = inv.i8 * inv.i8;
+        // dI10/dI4, dI10/dI6, dI10/dI8 (MODEL.md §3)
+        let w4 =
+            self.warp.derivative_wrt_invariant(inv.i4) - ws * i8_sq / (inv.i4 * inv.i4 * inv.i6);
+        let w6 =
+            self.weft.derivative_wrt_invariant(inv.i6) - ws * i8_sq / (inv.i4 * inv.i6 * inv.i6);
+        let w8 = ws * 2.0 * inv.i8 / (inv.i4 * inv.i6);
+        let (a0, b0) = (&point.fibres.warp, &point.fibres.weft);
+        Ok(dyad(a0, a0) * (2.0 * w4)
+            + dyad(b0, b0) * (2.0 * w6)
+            + (dyad(a0, b0) + dyad(b0, a0)) * w8)
+    }
+
+    fn strain_energy(&self, point: &PointKinematics) -> Result<f64, MaterialError> {
+        ensure_finite(self.name(), point)?;
+        let inv = FibreInvariants::of(&point.c, &point.fibres)?;
+        Ok(self.warp.energy(inv.i4.sqrt())
+            + self.weft.energy(inv.i6.sqrt())
+            + self.shear.energy(inv.i10()))
+    }
+}

@@ -1,0 +1,118 @@
+//! Layer A: molten thermoplastic matrix, temperature-dependent visco-hyperelastic law
+//! (MODEL.md §2; seed Eqs. (5)–(9)).
+//!
+//! Parameters (each a [`TemperatureTable`]):
+//! - `C10(T)`, MPa — neo-Hookean shear parameter (initial shear modulus `2 C10`);
+//! - `D1(T)`, 1/MPa — compressibility (bulk modulus `K = 2 / D1`);
+//! - `eta1(T)`, MPa·s — viscous parameter of the potential `psi_v = eta1 J2 (I1 - 3)`.
+//!
+//! State variables: none; the law depends on `C`, `Cdot` and `T` only.
+
+use super::{
+    ensure_finite, MaterialError, MaterialLaw, PointKinematics, TemperatureTable, ThicknessRule,
+};
+use nalgebra::Matrix3;
+
+/// The matrix parameters at one temperature.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MatrixParameters {
+    pub c10: f64,
+    pub d1: f64,
+    pub eta1: f64,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct ViscoHyperelasticMatrix {
+    c10: TemperatureTable,
+    d1: TemperatureTable,
+    eta1: TemperatureTable,
+}
+
+/// Invariants of `C` used by Eqs. (5)–(9).
+struct Invariants {
+    i1: f64,
+    i3: f64,
+}
+
+impl Invariants {
+    // seed Eq. (3)
+    fn of(c: &Matrix3<f64>) -> Result<Self, MaterialError> {
+        let i3 = c.determinant();
+        if i3.is_nan() || i3 <= 0.0 {
+            return Err(MaterialError::NonPositiveVolume { det_c: i3 });
+        }
+        Ok(Self { i1: c.trace(), i3 })
+    }
+}
+
+impl ViscoHyperelasticMatrix {
+    pub fn new(c10: TemperatureTable, d1: TemperatureTable, eta1: TemperatureTable) -> Self {
+        Self { c10, d1, eta1 }
+    }
+
+    /// `C10`, `D1` and `eta1` interpolated at `temperature`.
+    pub fn parameters_at(&self, temperature: f64) -> Result<MatrixParameters, MaterialError> {
+        Ok(MatrixParameters {
+            c10: self.c10.at(temperature)?,
+            d1: self.d1.at(temperature)?,
+            eta1: self.eta1.at(temperature)?,
+        })
+    }
+
+    pub fn tables(&self) -> [&TemperatureTable; 3] {
+        [&self.c10, &self.d1, &self.eta1]
+    }
+}
+
+/// Elastic stress, seed Eq. (8):
+/// `S_e = 2 C10 I3^(-1/3) (I - I1/3 C^-1) + (2/D1) (I3 - I3^(1/2)) C^-1`.
+fn elastic_stress(p: &MatrixParameters, c: &Matrix3<f64>, inv: &Invariants) -> Matrix3<f64> {
+    let c_inv = c.try_inverse().unwrap_or_else(Matrix3::zeros);
+    let deviatoric =
+        (Matrix3::identity() - c_inv * (inv.i1 / 3.0)) * (2.0 * p.c10 * inv.i3.cbrt().recip());
+    let volumetric = c_inv * (2.0 / p.d1 * (inv.i3 - inv.i3.sqrt()));
+    deviatoric + volumetric
+}
+
+/// Viscous stress, seed Eq. (9): `S_v = 2 eta1 (I1 - 3) Cdot`.
+fn viscous_stress(p: &MatrixParameters, c_dot: &Matrix3<f64>, inv: &Invariants) -> Matrix3<f64> {
+    c_dot * (2.0 * p.eta1 * (inv.i1 - 3.0))
+}
+
+impl MaterialLaw for ViscoHyperelasticMatrix {
+    fn name(&self) -> &'static str {
+        "matrix"
+    }
+
+    fn thickness_rule(&self) -> ThicknessRule {
+        ThicknessRule::PlaneStress
+    }
+
+    fn second_piola_kirchhoff(
+        &self,
+        point: &PointKinematics,
+    ) -> Result<Matrix3<f64>, MaterialError> {
+        ensure_finite(self.name(), point)?;
+        let p = self.parameters_at(point.temperature)?;
+        let inv = Invariants::of(&point.c)?;
+        Ok(elastic_stress(&p, &point.c, &inv) + viscous_stress(&p, &point.c_dot, &inv))
+    }
+
+    /// seed Eq. (5): `W_e = C10 (I1bar - 3) + (J - 1)^2 / D1`, `I1bar = J^(-2/3) I1`.
+    fn strain_energy(&self, point: &PointKinematics) -> Result<f64, MaterialError> {
+        ensure_finite(self.name(), point)?;
+        let p = self.parameters_at(point.temperature)?;
+        let inv = Invariants::of(&point.c)?;
+        let j = inv.i3.sqrt();
+        let i1_bar = inv.i1 / inv.i3.cbrt();
+        Ok(p.c10 * (i1_bar - 3.0) + (j - 1.0).powi(2) / p.d1)
+    }
+
+    /// seed Eq. (6): `psi_v = eta1 J2 (I1 - 3)`, `J2 = tr(Cdot^2) / 2` (Eq. (4)).
+    fn viscous_potential(&self, point: &PointKinematics) -> Result<f64, MaterialError> {
+        ensure_finite(self.name(), point)?;
+        let p = self.parameters_at(point.temperature)?;
+        let j2 = 0.5 * (point.c_dot * point.c_dot).trace();
+        Ok(p.eta1 * j2 * (point.c.trace() - 3.0))
+    }
+}

@@ -1,0 +1,183 @@
+//! Constitutive laws of the prepreg (MODEL.md §2–§4).
+//!
+//! Every layer law implements [`MaterialLaw`]: given the right Cauchy–Green tensor `C`, its
+//! rate `Cdot`, the temperature and the fibre directions of one material point, it returns the
+//! second Piola–Kirchhoff stress and the potentials it derives from. The [`laminate`] module
+//! stacks such layers into the A:B:A membrane section of the lamination model.
+
+pub mod card;
+pub mod fabric;
+pub mod laminate;
+pub mod matrix;
+pub mod stress_free_stretch;
+pub mod temperature_table;
+
+pub use card::MaterialCard;
+pub use fabric::WovenFabric;
+pub use laminate::{Laminate, LaminateState, Layer, MembraneKinematics, MembraneResponse};
+pub use matrix::ViscoHyperelasticMatrix;
+pub use temperature_table::TemperatureTable;
+
+use nalgebra::{Matrix3, Vector3};
+use std::fmt::Debug;
+
+/// Warp and weft directions `a0`, `b0` in the reference configuration (MODEL.md §1).
+///
+/// Unit vectors in the reference tangent plane; they are material directions, so the current
+/// yarns are `a = F a0` and `b = F b0` (non-orthogonal fibre tracking).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FibreDirections {
+    pub warp: Vector3<f64>,
+    pub weft: Vector3<f64>,
+}
+
+impl FibreDirections {
+    /// Warp at `angle` (radians) from the x axis in the x–y plane, weft 90° further on.
+    pub fn in_plane(angle: f64) -> Self {
+        let (s, c) = angle.sin_cos();
+        Self {
+            warp: Vector3::new(c, s, 0.0),
+            weft: Vector3::new(-s, c, 0.0),
+        }
+    }
+}
+
+impl Default for FibreDirections {
+    fn default() -> Self {
+        Self::in_plane(0.0)
+    }
+}
+
+/// Everything a layer law needs at one material point.
+#[derive(Clone, Copy, Debug)]
+pub struct PointKinematics {
+    /// Right Cauchy–Green tensor `C = F^T F`, seed Eq. (1).
+    pub c: Matrix3<f64>,
+    /// Its material rate `Cdot = Fdot^T F + F^T Fdot`, seed Eq. (2).
+    pub c_dot: Matrix3<f64>,
+    /// Temperature, °C.
+    pub temperature: f64,
+    pub fibres: FibreDirections,
+}
+
+impl PointKinematics {
+    /// The undeformed point at rest.
+    pub fn at_rest(temperature: f64, fibres: FibreDirections) -> Self {
+        Self {
+            c: Matrix3::identity(),
+            c_dot: Matrix3::zeros(),
+            temperature,
+            fibres,
+        }
+    }
+
+    /// Kinematics from the deformation gradient and its rate, seed Eqs. (1)–(2).
+    pub fn from_deformation(
+        f: &Matrix3<f64>,
+        f_dot: &Matrix3<f64>,
+        temperature: f64,
+        fibres: FibreDirections,
+    ) -> Self {
+        Self {
+            c: f.transpose() * f,
+            c_dot: f_dot.transpose() * f + f.transpose() * f_dot,
+            temperature,
+            fibres,
+        }
+    }
+}
+
+/// How a layer's thickness stretch `lambda3` follows from the in-plane deformation when the
+/// layer is part of a thin sheet (MODEL.md §2 and §3).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ThicknessRule {
+    /// `lambda3` is solved so that the through-thickness stress `S33` vanishes.
+    PlaneStress,
+    /// The layer carries no through-thickness stress and keeps its volume:
+    /// `lambda3 = 1 / sqrt(det C2)`.
+    VolumeConserving,
+}
+
+/// A constitutive law of one layer of the prepreg.
+pub trait MaterialLaw: Debug + Send + Sync {
+    /// Short name used in messages and output ("matrix", "fabric").
+    fn name(&self) -> &'static str;
+
+    /// How the layer's thickness follows the in-plane deformation in a sheet.
+    fn thickness_rule(&self) -> ThicknessRule;
+
+    /// Second Piola–Kirchhoff stress `S` (MPa), elastic and viscous parts together.
+    fn second_piola_kirchhoff(
+        &self,
+        point: &PointKinematics,
+    ) -> Result<Matrix3<f64>, MaterialError>;
+
+    /// Stored (hyperelastic) energy per unit reference volume (MPa); `S_e = 2 dW/dC`.
+    fn strain_energy(&self, point: &PointKinematics) -> Result<f64, MaterialError>;
+
+    /// Viscous potential per unit reference volume (MPa); `S_v = 2 dpsi/dCdot`.
+    /// Zero for purely elastic laws.
+    fn viscous_potential(&self, _point: &PointKinematics) -> Result<f64, MaterialError> {
+        Ok(0.0)
+    }
+}
+
+/// Cauchy stress `sigma = F S F^T / det F`.
+pub fn cauchy_stress(f: &Matrix3<f64>, s: &Matrix3<f64>) -> Matrix3<f64> {
+    f * s * f.transpose() / f.determinant()
+}
+
+/// Why a material law could not produce a stress.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum MaterialError {
+    #[error(
+        "temperature {temperature} °C is outside the table of {quantity} ({min} to {max} °C); \
+         extend the table in the material card"
+    )]
+    TemperatureOutOfRange {
+        quantity: String,
+        temperature: f64,
+        min: f64,
+        max: f64,
+    },
+    #[error("the material is inverted or crushed: det C = {det_c:e} must be > 0")]
+    NonPositiveVolume { det_c: f64 },
+    #[error("fibre stretch squared {invariant} = {value:e} must be > 0")]
+    DegenerateFibre { invariant: &'static str, value: f64 },
+    #[error("non-finite input to the {law} law: {what}")]
+    NonFinite {
+        law: &'static str,
+        what: &'static str,
+    },
+    #[error(
+        "no stress-free thickness stretch found for layer {layer} ({law}) after {iterations} \
+         iterations (last lambda3 = {lambda3:e}, S33 = {s33:e} MPa)"
+    )]
+    PlaneStressNotConverged {
+        layer: usize,
+        law: &'static str,
+        iterations: usize,
+        lambda3: f64,
+        s33: f64,
+    },
+}
+
+pub(crate) fn ensure_finite(
+    law: &'static str,
+    point: &PointKinematics,
+) -> Result<(), MaterialError> {
+    let finite = |m: &Matrix3<f64>| m.iter().all(|v| v.is_finite());
+    if !finite(&point.c) {
+        return Err(MaterialError::NonFinite { law, what: "C" });
+    }
+    if !finite(&point.c_dot) {
+        return Err(MaterialError::NonFinite { law, what: "Cdot" });
+    }
+    if !point.temperature.is_finite() {
+        return Err(MaterialError::NonFinite {
+            law,
+            what: "temperature",
+        });
+    }
+    Ok(())
+}

@@ -1,0 +1,108 @@
+//! Safeguarded Newton iteration for a stretch that makes one stress component vanish: the
+//! plane-stress thickness stretch of a layer (MODEL.md §2, [choice]) or the lateral stretch of
+//! a uniaxial-stress test.
+
+use super::MaterialError;
+
+/// Iterations before giving up; Newton from the previous step's stretch needs 2–4.
+pub const MAX_ITERATIONS: usize = 60;
+
+/// Relative step of the finite-difference slope.
+const SLOPE_STEP: f64 = 1e-7;
+
+/// The last iterate when no root was found.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NotConverged {
+    pub iterations: usize,
+    pub stretch: f64,
+    pub residual: f64,
+}
+
+/// Finds `lambda > 0` with `stress(lambda) = 0`, starting from `guess`.
+///
+/// `stress` must increase with the stretch near the root, as any stable material's
+/// through-thickness stress does. It is converged when `|stress| <= tolerance` or when the
+/// step falls below 1e-14 of the stretch. Newton steps with a finite-difference slope are kept
+/// inside a bracket of the root once one is known, and replaced by bisection when they leave it.
+pub fn find_stress_free_stretch(
+    mut stress: impl FnMut(f64) -> Result<f64, MaterialError>,
+    guess: f64,
+    tolerance: f64,
+) -> Result<Result<f64, NotConverged>, MaterialError> {
+    let mut lambda = if guess.is_finite() && guess > 0.0 {
+        guess
+    } else {
+        1.0
+    };
+    let mut below = 0.0_f64; // largest stretch known to give stress < 0
+    let mut above = f64::INFINITY; // smallest stretch known to give stress > 0
+    let mut residual = f64::NAN;
+    for iteration in 0..MAX_ITERATIONS {
+        residual = stress(lambda)?;
+        if !residual.is_finite() {
+            return Ok(Err(NotConverged {
+                iterations: iteration,
+                stretch: lambda,
+                residual,
+            }));
+        }
+        if residual.abs() <= tolerance {
+            return Ok(Ok(lambda));
+        }
+        if residual < 0.0 {
+            below = below.max(lambda);
+        } else {
+            above = above.min(lambda);
+        }
+        let h = SLOPE_STEP * lambda;
+        let slope = (stress(lambda + h)? - residual) / h;
+        let newton = lambda - residual / slope;
+        let inside = |x: f64| x.is_finite() && x > below && x < above;
+        let next = if slope > 0.0 && inside(newton) {
+            newton
+        } else if above.is_finite() {
+            0.5 * (below + above)
+        } else {
+            2.0 * lambda.max(below)
+        };
+        if (next - lambda).abs() <= 1e-14 * lambda {
+            return Ok(Ok(next));
+        }
+        lambda = next;
+    }
+    Ok(Err(NotConverged {
+        iterations: MAX_ITERATIONS,
+        stretch: lambda,
+        residual,
+    }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn finds_the_root_of_a_stiffening_law() {
+        // S(l) = l^3 - 0.5: root at 0.5^(1/3)
+        let root = find_stress_free_stretch(|l| Ok(l.powi(3) - 0.5), 1.0, 1e-14)
+            .unwrap()
+            .unwrap();
+        assert!((root - 0.5f64.cbrt()).abs() < 1e-12);
+    }
+
+    #[test]
+    fn survives_a_bad_guess_and_a_flat_start() {
+        // flat for small stretch, steep beyond: Newton alone would overshoot
+        let law = |l: f64| Ok((l - 2.0).atan() * 1e3 + 1e-3 * (l - 2.0).powi(3));
+        let root = find_stress_free_stretch(law, 0.01, 1e-10).unwrap().unwrap();
+        assert!((root - 2.0).abs() < 1e-10, "{root}");
+    }
+
+    #[test]
+    fn reports_failure_when_there_is_no_root() {
+        let failure = find_stress_free_stretch(|l| Ok(1.0 + l), 1.0, 1e-12)
+            .unwrap()
+            .unwrap_err();
+        assert!(failure.residual > 0.0);
+    }
+}

@@ -1,0 +1,79 @@
+//! Helpers shared by the integration tests.
+#![allow(dead_code)]
+
+use nalgebra::{Matrix3, Rotation3, Vector3};
+use proptest::prelude::*;
+use std::path::PathBuf;
+use thermostamp::material::MaterialCard;
+
+pub fn repo_path(relative: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(relative)
+}
+
+/// The shipped T300/PPS card.
+pub fn t300_card() -> MaterialCard {
+    MaterialCard::load(&repo_path("materials/t300-5hs-pps.toml")).expect("shipped card loads")
+}
+
+/// `2 dW/dX` by central differences with symmetric perturbations of the symmetric `x`:
+/// for `i != j` both `X_ij` and `X_ji` move by `h`, so `dW = h (dW/dX_ij + dW/dX_ji) = h S_ij`.
+pub fn twice_gradient_by_differences(
+    energy: impl Fn(&Matrix3<f64>) -> f64,
+    x: &Matrix3<f64>,
+    h: f64,
+) -> Matrix3<f64> {
+    let mut s = Matrix3::zeros();
+    for i in 0..3 {
+        for j in i..3 {
+            let mut e = Matrix3::zeros();
+            e[(i, j)] += 1.0;
+            e[(j, i)] += 1.0;
+            // diagonal: the entry moves by 2h; off-diagonal: two entries move by h each
+            let dw = (energy(&(x + e * h)) - energy(&(x - e * h))) / (2.0 * h);
+            s[(i, j)] = dw;
+            s[(j, i)] = dw;
+        }
+    }
+    s
+}
+
+/// Largest entry of `a - b` relative to `scale`.
+pub fn relative_difference(a: &Matrix3<f64>, b: &Matrix3<f64>, scale: f64) -> f64 {
+    (a - b).amax() / scale
+}
+
+pub fn rotation(axis_angle: [f64; 3]) -> Matrix3<f64> {
+    Rotation3::new(Vector3::from(axis_angle)).into_inner()
+}
+
+/// Deformation gradients `R (I + H)` with `|H_ij| <= 0.35` and `det F >= 0.3`.
+pub fn deformation_gradient() -> impl Strategy<Value = Matrix3<f64>> {
+    (
+        prop::array::uniform9(-0.35..0.35f64),
+        prop::array::uniform3(-3.0..3.0f64),
+    )
+        .prop_map(|(h, r)| rotation(r) * (Matrix3::identity() + Matrix3::from_row_slice(&h)))
+        .prop_filter("det F >= 0.3", |f| f.determinant() >= 0.3)
+}
+
+/// Rates of deformation with entries up to 2 /s.
+pub fn deformation_rate() -> impl Strategy<Value = Matrix3<f64>> {
+    prop::array::uniform9(-2.0..2.0f64).prop_map(|h| Matrix3::from_row_slice(&h))
+}
+
+/// In-plane trellis shear `gamma` (radians) with yarn stretches `la`, `lb`: the warp `x` becomes
+/// `la (cos(g/2), sin(g/2))`, the weft `y` becomes `lb (sin(g/2), cos(g/2))`.
+pub fn trellis(gamma: f64, la: f64, lb: f64, thickness_stretch: f64) -> Matrix3<f64> {
+    let (s, c) = (0.5 * gamma).sin_cos();
+    Matrix3::new(
+        la * c,
+        lb * s,
+        0.0,
+        la * s,
+        lb * c,
+        0.0,
+        0.0,
+        0.0,
+        thickness_stretch,
+    )
+}
