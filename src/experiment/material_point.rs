@@ -5,12 +5,12 @@
 //! (three-point formulas, central inside, one-sided at the ends), so a history whose `F` is
 //! linear in time gets the exact `Cdot`.
 
-use crate::material::stress_free_stretch::find_stress_free_stretch;
+use crate::material::stress_free_stretch::{find_stress_free_stretch, StressSample};
 use crate::material::{
     cauchy_stress, FibreDirections, Laminate, MaterialError, MaterialLaw, MembraneKinematics,
     PointKinematics, ViscoHyperelasticMatrix,
 };
-use nalgebra::{Matrix2, Matrix3, Matrix3x2};
+use nalgebra::{Matrix2, Matrix3};
 use std::ops::{Add, Mul};
 
 /// One instant of a 3D history.
@@ -203,12 +203,14 @@ pub fn matrix_uniaxial_stress(
                 fibres,
             }
         };
-        let s22 = |mu: f64| Ok(matrix.second_piola_kirchhoff(&point_at(mu))?[(1, 1)]);
-        let scale = matrix
-            .second_piola_kirchhoff(&point_at(lateral))
-            .map_err(fail)?
-            .amax();
-        lateral = find_stress_free_stretch(s22, lateral, 1e-13 * scale)
+        let s22 = |mu: f64| {
+            let s = matrix.second_piola_kirchhoff(&point_at(mu))?;
+            Ok(StressSample {
+                value: s[(1, 1)],
+                scale: s[(0, 0)].abs(),
+            })
+        };
+        lateral = find_stress_free_stretch(s22, lateral, 1e-13)
             .map_err(fail)?
             .map_err(|nc| {
                 fail(MaterialError::PlaneStressNotConverged {
@@ -227,9 +229,4 @@ pub fn matrix_uniaxial_stress(
         previous_t = t;
     }
     Ok(out)
-}
-
-/// Embeds an in-plane deformation gradient in 3D (x–y plane stays at z = 0).
-pub fn in_plane(f: &Matrix2<f64>) -> Matrix3x2<f64> {
-    Matrix3x2::new(f[(0, 0)], f[(0, 1)], f[(1, 0)], f[(1, 1)], 0.0, 0.0)
 }

@@ -317,7 +317,7 @@ shear = [0.25, 0.0, 2.0]
     fn unknown_key_is_named_with_its_line() {
         let text = VALID.replace("shear = [", "sheer = 1\nshear = [");
         let e = error_of(&text);
-        assert!(e.starts_with("card.toml: line 17"), "{e}");
+        assert!(e.starts_with("card.toml: line 15, column 1"), "{e}");
         assert!(e.contains("sheer"), "{e}");
         assert!(!e.contains('\n'), "{e}");
     }

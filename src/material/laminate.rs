@@ -5,7 +5,7 @@
 //! the last converged step ([`LaminateState`]); the viscous matrix needs the rate because its
 //! through-thickness stress depends on `Cdot33 = 2 lambda3 lambda3dot`.
 
-use super::stress_free_stretch::find_stress_free_stretch;
+use super::stress_free_stretch::{find_stress_free_stretch, StressSample};
 use super::{FibreDirections, MaterialError, MaterialLaw, PointKinematics, ThicknessRule};
 use nalgebra::{Matrix2, Matrix3, Matrix3x2};
 use std::sync::Arc;
@@ -24,6 +24,17 @@ pub struct Layer {
 #[derive(Clone, Debug)]
 pub struct Laminate {
     layers: Vec<Layer>,
+    /// Indices of the layers that share one law object, in stack order. Layers of a group that
+    /// start a step in the same state end it in the same state (the law sees no thickness), so
+    /// the plane-stress solve is done once per group: the two skins of A:B:A cost one.
+    groups: Vec<Vec<usize>>,
+}
+
+/// A layer's thickness stretch, its rate and its stress after a step.
+struct LayerSolution {
+    lambda3: f64,
+    rate: f64,
+    s: Matrix3<f64>,
 }
 
 /// In-plane kinematics of the sheet in an orthonormal local basis `(e1, e2)` of the reference
@@ -107,7 +118,17 @@ impl Laminate {
                 layer.thickness
             ));
         }
-        Ok(Self { layers })
+        let mut groups: Vec<Vec<usize>> = Vec::new();
+        for (k, layer) in layers.iter().enumerate() {
+            match groups
+                .iter_mut()
+                .find(|g| Arc::ptr_eq(&layers[g[0]].law, &layer.law))
+            {
+                Some(group) => group.push(k),
+                None => groups.push(vec![k]),
+            }
+        }
+        Ok(Self { layers, groups })
     }
 
     /// The A:B:A stack of the lamination model: `matrix (t_A) : fabric (t_B) : matrix (t_A)`.
@@ -163,17 +184,23 @@ impl Laminate {
     ) -> Result<MembraneResponse, MaterialError> {
         let mut n = Matrix2::zeros();
         let mut thickness = 0.0;
-        for (k, layer) in self.layers.iter().enumerate() {
-            let previous = state.thickness_stretch[k];
-            let lambda3 = self.thickness_stretch(k, kin, previous, dt)?;
-            let rate = thickness_rate(lambda3, previous, dt);
-            state.thickness_stretch[k] = lambda3;
-            state.thickness_stretch_rate[k] = rate;
-            let s = layer
-                .law
-                .second_piola_kirchhoff(&kin.layer_point(lambda3, rate))?;
-            n += s.fixed_view::<2, 2>(0, 0) * layer.thickness;
-            thickness += layer.thickness * lambda3;
+        for group in &self.groups {
+            let previous = state.thickness_stretch[group[0]];
+            let shared = self.solve_layer(group[0], kin, previous, dt)?;
+            for &k in group {
+                let own;
+                let solution = if state.thickness_stretch[k] == previous {
+                    &shared
+                } else {
+                    own = self.solve_layer(k, kin, state.thickness_stretch[k], dt)?;
+                    &own
+                };
+                state.thickness_stretch[k] = solution.lambda3;
+                state.thickness_stretch_rate[k] = solution.rate;
+                let t_k = self.layers[k].thickness;
+                n += solution.s.fixed_view::<2, 2>(0, 0) * t_k;
+                thickness += t_k * solution.lambda3;
+            }
         }
         Ok(MembraneResponse { n, thickness })
     }
@@ -205,38 +232,51 @@ impl Laminate {
             })
     }
 
-    fn thickness_stretch(
+    /// Thickness stretch of layer `k` by its [`ThicknessRule`], with the stress it gives.
+    fn solve_layer(
         &self,
         k: usize,
         kin: &MembraneKinematics,
         previous: f64,
         dt: f64,
-    ) -> Result<f64, MaterialError> {
+    ) -> Result<LayerSolution, MaterialError> {
         let det_c2 = kin.c.determinant();
         if det_c2.is_nan() || det_c2 <= 0.0 {
             return Err(MaterialError::NonPositiveVolume { det_c: det_c2 });
         }
         let law = &self.layers[k].law;
+        let stress_at = |lambda3: f64| {
+            let rate = thickness_rate(lambda3, previous, dt);
+            let s = law.second_piola_kirchhoff(&kin.layer_point(lambda3, rate))?;
+            Ok(LayerSolution { lambda3, rate, s })
+        };
         match law.thickness_rule() {
-            ThicknessRule::VolumeConserving => Ok(det_c2.sqrt().recip()),
+            ThicknessRule::VolumeConserving => stress_at(det_c2.sqrt().recip()),
             ThicknessRule::PlaneStress => {
+                // The last two evaluations (residual and slope probe) may hold the root.
+                let mut recent: [Option<LayerSolution>; 2] = [None, None];
                 let s33 = |lambda3: f64| {
-                    let rate = thickness_rate(lambda3, previous, dt);
-                    Ok(law.second_piola_kirchhoff(&kin.layer_point(lambda3, rate))?[(2, 2)])
+                    let solution = stress_at(lambda3)?;
+                    let sample = StressSample {
+                        value: solution.s[(2, 2)],
+                        scale: solution.s.fixed_view::<2, 2>(0, 0).amax(),
+                    };
+                    recent.swap(0, 1);
+                    recent[1] = Some(solution);
+                    Ok(sample)
                 };
-                let guess = previous;
-                let start = law.second_piola_kirchhoff(
-                    &kin.layer_point(guess, thickness_rate(guess, previous, dt)),
-                )?;
-                let in_plane_scale = start.fixed_view::<2, 2>(0, 0).amax();
-                find_stress_free_stretch(s33, guess, PLANE_STRESS_TOLERANCE * in_plane_scale)?
+                let lambda3 = find_stress_free_stretch(s33, previous, PLANE_STRESS_TOLERANCE)?
                     .map_err(|failure| MaterialError::PlaneStressNotConverged {
                         layer: k,
                         law: law.name(),
                         iterations: failure.iterations,
                         lambda3: failure.stretch,
                         s33: failure.residual,
-                    })
+                    })?;
+                match recent.into_iter().flatten().find(|s| s.lambda3 == lambda3) {
+                    Some(solution) => Ok(solution),
+                    None => stress_at(lambda3),
+                }
             }
         }
     }

@@ -58,10 +58,6 @@ impl ViscoHyperelasticMatrix {
             eta1: self.eta1.at(temperature)?,
         })
     }
-
-    pub fn tables(&self) -> [&TemperatureTable; 3] {
-        [&self.c10, &self.d1, &self.eta1]
-    }
 }
 
 /// Elastic stress, seed Eq. (8):

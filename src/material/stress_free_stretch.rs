@@ -10,6 +10,9 @@ pub const MAX_ITERATIONS: usize = 60;
 /// Relative step of the finite-difference slope.
 const SLOPE_STEP: f64 = 1e-7;
 
+/// Newton steps smaller than this fraction of the stretch end the iteration.
+const STEP_RESOLUTION: f64 = 1e-14;
+
 /// The last iterate when no root was found.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct NotConverged {
@@ -18,14 +21,23 @@ pub struct NotConverged {
     pub residual: f64,
 }
 
-/// Finds `lambda > 0` with `stress(lambda) = 0`, starting from `guess`.
+/// One evaluation of the stress component that must vanish.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StressSample {
+    /// The component driven to zero (MPa).
+    pub value: f64,
+    /// Magnitude of the other stress components, the scale the tolerance is relative to.
+    pub scale: f64,
+}
+
+/// Finds `lambda > 0` with `stress(lambda).value = 0`, starting from `guess`.
 ///
 /// `stress` must increase with the stretch near the root, as any stable material's
-/// through-thickness stress does. It is converged when `|stress| <= tolerance` or when the
-/// step falls below 1e-14 of the stretch. Newton steps with a finite-difference slope are kept
+/// through-thickness stress does. It is converged when `|value| <= tolerance * scale` or when
+/// the Newton step falls below 1e-14 of the stretch. Newton steps with a finite-difference slope are kept
 /// inside a bracket of the root once one is known, and replaced by bisection when they leave it.
 pub fn find_stress_free_stretch(
-    mut stress: impl FnMut(f64) -> Result<f64, MaterialError>,
+    mut stress: impl FnMut(f64) -> Result<StressSample, MaterialError>,
     guess: f64,
     tolerance: f64,
 ) -> Result<Result<f64, NotConverged>, MaterialError> {
@@ -38,7 +50,8 @@ pub fn find_stress_free_stretch(
     let mut above = f64::INFINITY; // smallest stretch known to give stress > 0
     let mut residual = f64::NAN;
     for iteration in 0..MAX_ITERATIONS {
-        residual = stress(lambda)?;
+        let sample = stress(lambda)?;
+        residual = sample.value;
         if !residual.is_finite() {
             return Ok(Err(NotConverged {
                 iterations: iteration,
@@ -46,7 +59,7 @@ pub fn find_stress_free_stretch(
                 residual,
             }));
         }
-        if residual.abs() <= tolerance {
+        if residual.abs() <= tolerance * sample.scale {
             return Ok(Ok(lambda));
         }
         if residual < 0.0 {
@@ -55,20 +68,20 @@ pub fn find_stress_free_stretch(
             above = above.min(lambda);
         }
         let h = SLOPE_STEP * lambda;
-        let slope = (stress(lambda + h)? - residual) / h;
+        let slope = (stress(lambda + h)?.value - residual) / h;
         let newton = lambda - residual / slope;
+        // A Newton step below the resolution of lambda: the residual is rounding noise.
+        if slope > 0.0 && (newton - lambda).abs() <= STEP_RESOLUTION * lambda {
+            return Ok(Ok(lambda));
+        }
         let inside = |x: f64| x.is_finite() && x > below && x < above;
-        let next = if slope > 0.0 && inside(newton) {
+        lambda = if slope > 0.0 && inside(newton) {
             newton
         } else if above.is_finite() {
             0.5 * (below + above)
         } else {
             2.0 * lambda.max(below)
         };
-        if (next - lambda).abs() <= 1e-14 * lambda {
-            return Ok(Ok(next));
-        }
-        lambda = next;
     }
     Ok(Err(NotConverged {
         iterations: MAX_ITERATIONS,
@@ -81,10 +94,14 @@ pub fn find_stress_free_stretch(
 mod tests {
     use super::*;
 
+    fn sample(value: f64) -> Result<StressSample, MaterialError> {
+        Ok(StressSample { value, scale: 1.0 })
+    }
+
     #[test]
     fn finds_the_root_of_a_stiffening_law() {
         // S(l) = l^3 - 0.5: root at 0.5^(1/3)
-        let root = find_stress_free_stretch(|l| Ok(l.powi(3) - 0.5), 1.0, 1e-14)
+        let root = find_stress_free_stretch(|l| sample(l.powi(3) - 0.5), 1.0, 1e-14)
             .unwrap()
             .unwrap();
         assert!((root - 0.5f64.cbrt()).abs() < 1e-12);
@@ -93,14 +110,14 @@ mod tests {
     #[test]
     fn survives_a_bad_guess_and_a_flat_start() {
         // flat for small stretch, steep beyond: Newton alone would overshoot
-        let law = |l: f64| Ok((l - 2.0).atan() * 1e3 + 1e-3 * (l - 2.0).powi(3));
+        let law = |l: f64| sample((l - 2.0).atan() * 1e3 + 1e-3 * (l - 2.0).powi(3));
         let root = find_stress_free_stretch(law, 0.01, 1e-10).unwrap().unwrap();
         assert!((root - 2.0).abs() < 1e-10, "{root}");
     }
 
     #[test]
     fn reports_failure_when_there_is_no_root() {
-        let failure = find_stress_free_stretch(|l| Ok(1.0 + l), 1.0, 1e-12)
+        let failure = find_stress_free_stretch(|l| sample(1.0 + l), 1.0, 1e-12)
             .unwrap()
             .unwrap_err();
         assert!(failure.residual > 0.0);

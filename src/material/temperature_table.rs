@@ -58,16 +58,8 @@ impl TemperatureTable {
         })
     }
 
-    pub fn quantity(&self) -> &str {
-        &self.quantity
-    }
-
     pub fn values(&self) -> &[f64] {
         &self.values
-    }
-
-    pub fn temperatures(&self) -> &[f64] {
-        &self.temperatures
     }
 
     /// Lowest and highest temperature of the table.

@@ -77,3 +77,8 @@ pub fn trellis(gamma: f64, la: f64, lb: f64, thickness_stretch: f64) -> Matrix3<
         thickness_stretch,
     )
 }
+
+/// Embeds an in-plane deformation gradient in 3D (the x–y plane stays at z = 0).
+pub fn in_plane(f: &nalgebra::Matrix2<f64>) -> nalgebra::Matrix3x2<f64> {
+    nalgebra::Matrix3x2::new(f[(0, 0)], f[(0, 1)], f[(1, 0)], f[(1, 1)], 0.0, 0.0)
+}
