@@ -17,9 +17,9 @@ fn thermostamp(args: &[&str]) -> Output {
         .expect("the binary runs")
 }
 
-/// Runs the driver and parses its CSV output into (header, rows).
-fn drive(layer: &str, history: &str, extra: &[&str]) -> (Vec<String>, Vec<Vec<f64>>) {
-    let mut args = vec![
+/// `material-point` on the shipped card with `layer` and `history`.
+fn driver_args<'a>(layer: &'a str, history: &'a str) -> Vec<&'a str> {
+    vec![
         "material-point",
         "--card",
         CARD,
@@ -27,7 +27,12 @@ fn drive(layer: &str, history: &str, extra: &[&str]) -> (Vec<String>, Vec<Vec<f6
         layer,
         "--history",
         history,
-    ];
+    ]
+}
+
+/// Runs the driver and parses its CSV output into (header, rows).
+fn drive(layer: &str, history: &str, extra: &[&str]) -> (Vec<String>, Vec<Vec<f64>>) {
+    let mut args = driver_args(layer, history);
     args.extend_from_slice(extra);
     let out = thermostamp(&args);
     assert!(
@@ -159,15 +164,7 @@ fn fibre_angle_option_turns_the_yarns() {
 fn output_option_writes_the_same_csv() {
     let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("laminate-out.csv");
     let history = "examples/material-point/laminate-shear-300C.csv";
-    let args = [
-        "material-point",
-        "--card",
-        CARD,
-        "--layer",
-        "laminate",
-        "--history",
-        history,
-    ];
+    let args = driver_args("laminate", history);
     let to_stdout = thermostamp(&args);
     let to_file = thermostamp(&[&args[..], &["--output", path.to_str().unwrap()]].concat());
     assert!(to_file.status.success() && to_file.stdout.is_empty());
@@ -207,31 +204,16 @@ fn bad_histories_give_a_located_one_line_error() {
     ];
     for (name, content, expected) in cases {
         let path = scratch(name, &content);
-        let args = [
-            "material-point",
-            "--card",
-            CARD,
-            "--layer",
-            "matrix",
-            "--history",
-            path.to_str().unwrap(),
-        ];
-        assert_bad_input(&args, expected);
+        assert_bad_input(&driver_args("matrix", path.to_str().unwrap()), expected);
     }
     let laminate_row = scratch(
         "laminate-inverted.csv",
         "t,F11,F12,F21,F22,T\n0,1,0,0,1,300\n1,1,2,1,1,300\n",
     );
-    let args = [
-        "material-point",
-        "--card",
-        CARD,
-        "--layer",
-        "laminate",
-        "--history",
-        laminate_row.to_str().unwrap(),
-    ];
-    assert_bad_input(&args, &["line 3", "det F"]);
+    assert_bad_input(
+        &driver_args("laminate", laminate_row.to_str().unwrap()),
+        &["line 3", "det F"],
+    );
 }
 
 #[test]
@@ -246,93 +228,41 @@ fn bad_cards_and_arguments_give_exit_code_2() {
         "negative.toml",
         &card_text.replace("fabric_thickness = 0.23", "fabric_thickness = -0.23"),
     );
-    let cases: [(Vec<&str>, &[&str]); 6] = [
+    let with_card = |card: &str, expected: &[&str]| {
+        let args = [
+            "material-point",
+            "--card",
+            card,
+            "--layer",
+            "laminate",
+            "--history",
+            history,
+        ];
+        assert_bad_input(&args, expected);
+    };
+    with_card(
+        unknown_key.to_str().unwrap(),
+        &["unknown-key.toml: line", "locking"],
+    );
+    with_card(negative.to_str().unwrap(), &["fabric_thickness"]);
+    with_card("no/such/card.toml", &["no/such/card.toml"]);
+    assert_bad_input(&driver_args("laminate", "no/such.csv"), &["no/such.csv"]);
+    // clap's own usage errors: exit code 2 with a usage hint after the message
+    for (args, culprit) in [
+        (driver_args("resin", history), "resin"),
         (
-            vec![
-                "material-point",
-                "--card",
-                unknown_key.to_str().unwrap(),
-                "--layer",
-                "laminate",
-                "--history",
-                history,
-            ],
-            &["unknown-key.toml: line", "locking"],
+            [driver_args("laminate", history), vec!["--angle", "abc"]].concat(),
+            "abc",
         ),
-        (
-            vec![
-                "material-point",
-                "--card",
-                negative.to_str().unwrap(),
-                "--layer",
-                "laminate",
-                "--history",
-                history,
-            ],
-            &["fabric_thickness"],
-        ),
-        (
-            vec![
-                "material-point",
-                "--card",
-                "no/such/card.toml",
-                "--layer",
-                "laminate",
-                "--history",
-                history,
-            ],
-            &["no/such/card.toml"],
-        ),
-        (
-            vec![
-                "material-point",
-                "--card",
-                CARD,
-                "--layer",
-                "laminate",
-                "--history",
-                "no/such.csv",
-            ],
-            &["no/such.csv"],
-        ),
-        (
-            vec![
-                "material-point",
-                "--card",
-                CARD,
-                "--layer",
-                "resin",
-                "--history",
-                history,
-            ],
-            &["resin"],
-        ),
-        (
-            vec![
-                "material-point",
-                "--card",
-                CARD,
-                "--layer",
-                "laminate",
-                "--history",
-                history,
-                "--angle",
-                "abc",
-            ],
-            &["abc"],
-        ),
-    ];
-    for (args, expected) in cases {
-        if args.contains(&"resin") || args.contains(&"abc") {
-            // clap's own usage errors: exit code 2 with a usage hint
-            let out = thermostamp(&args);
-            assert_eq!(out.status.code(), Some(2));
-            assert!(String::from_utf8_lossy(&out.stderr).contains(expected[0]));
-        } else {
-            assert_bad_input(&args, expected);
-        }
+        (vec![], "Usage"),
+    ] {
+        let out = thermostamp(&args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        assert!(
+            String::from_utf8_lossy(&out.stderr).contains(culprit),
+            "{args:?}"
+        );
     }
-    assert_eq!(thermostamp(&[]).status.code(), Some(2));
     assert_eq!(
         thermostamp(&["material-point", "--help"]).status.code(),
         Some(0)
