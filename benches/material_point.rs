@@ -44,6 +44,8 @@ fn main() {
     let matrix_ns = time_per_call(budget, |_| {
         black_box(
             card.matrix
+                .as_deref()
+                .unwrap()
                 .second_piola_kirchhoff(black_box(&point))
                 .unwrap(),
         );

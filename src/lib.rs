@@ -9,6 +9,9 @@
 //! - [`cli`]: the `thermostamp` command line.
 
 pub mod cli;
+pub mod element;
 pub mod experiment;
 pub mod io;
 pub mod material;
+pub mod mesh;
+pub mod solver;

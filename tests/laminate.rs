@@ -186,7 +186,13 @@ fn faster_shearing_adds_the_matrix_viscous_stress() {
         drive_laminate(laminate, FibreDirections::default(), &history).unwrap()[50]
     };
     let (slow, fast) = (run(1e4), run(0.01));
-    let eta1 = card.matrix.parameters_at(T).unwrap().eta1;
+    let eta1 = card
+        .matrix
+        .as_deref()
+        .unwrap()
+        .parameters_at(T)
+        .unwrap()
+        .eta1;
     let t_a = laminate.layers()[0].thickness;
     let expected = 2.0 * t_a * 2.0 * eta1 * g_end * g_end * (g_end / 0.01);
     let got = fast.n[(0, 1)] - slow.n[(0, 1)];
@@ -229,10 +235,14 @@ fn inverted_sheet_and_hot_sheet_are_errors() {
 #[test]
 fn shared_skins_solve_like_separate_layers() {
     let card = t300_card();
-    let separate_matrix: Arc<dyn MaterialLaw> = Arc::new((*card.matrix).clone());
-    let shared =
-        Laminate::matrix_fabric_matrix(card.matrix.clone(), 0.04, card.fabric.clone(), 0.23)
-            .unwrap();
+    let separate_matrix: Arc<dyn MaterialLaw> = Arc::new(card.matrix.as_deref().unwrap().clone());
+    let shared = Laminate::matrix_fabric_matrix(
+        card.matrix.clone().unwrap(),
+        0.04,
+        card.fabric.clone(),
+        0.23,
+    )
+    .unwrap();
     let separate = Laminate::new(vec![
         shared.layers()[0].clone(),
         shared.layers()[1].clone(),

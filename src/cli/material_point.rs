@@ -68,7 +68,9 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             let table = read_csv_table(&args.history, &LAYER_COLUMNS)?;
             let history = point_history(&table)?;
             let law: &dyn MaterialLaw = match args.layer {
-                LayerChoice::Matrix => card.matrix.as_ref(),
+                LayerChoice::Matrix => card.matrix.as_deref().ok_or_else(|| {
+                    anyhow::anyhow!("{}: the card has no [matrix] section", args.card.display())
+                })?,
                 _ => card.fabric.as_ref(),
             };
             let response = drive_layer(law, fibres, &history).map_err(|f| locate(&table, f))?;

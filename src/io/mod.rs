@@ -1,6 +1,9 @@
 //! Readers and writers of the files users hand in and get back.
 
 pub mod csv_table;
+pub mod plot;
+pub mod sheet_frame;
+pub mod vtk;
 
 pub use csv_table::{read_csv_table, write_csv, CsvTable};
 

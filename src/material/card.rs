@@ -14,7 +14,8 @@ pub struct MaterialCard {
     pub name: String,
     /// Density of the ply, tonne/mm^3.
     pub density: f64,
-    pub matrix: Arc<ViscoHyperelasticMatrix>,
+    /// The matrix law; absent for a dry fabric whose stack has no matrix layer.
+    pub matrix: Option<Arc<ViscoHyperelasticMatrix>>,
     pub fabric: Arc<WovenFabric>,
     pub laminate: Laminate,
 }
@@ -33,14 +34,14 @@ struct CardFile {
     name: String,
     density: f64,
     layers: LayersSection,
-    matrix: MatrixSection,
+    matrix: Option<MatrixSection>,
     fabric: FabricSection,
 }
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct LayersSection {
-    matrix_thickness: f64,
+    matrix_thickness: Option<f64>,
     fabric_thickness: f64,
     #[serde(default = "default_stack")]
     stack: Vec<LayerKind>,
@@ -144,7 +145,11 @@ impl CardFile {
             return Err("name must not be empty".into());
         }
         let density = positive("density", self.density)?;
-        let matrix = Arc::new(self.matrix.check()?);
+        let matrix = self
+            .matrix
+            .map(MatrixSection::check)
+            .transpose()?
+            .map(Arc::new);
         let fabric = Arc::new(self.fabric.check()?);
         let laminate = self.layers.check(matrix.clone(), fabric.clone())?;
         Ok(MaterialCard {
@@ -160,23 +165,37 @@ impl CardFile {
 impl LayersSection {
     fn check(
         &self,
-        matrix: Arc<ViscoHyperelasticMatrix>,
+        matrix: Option<Arc<ViscoHyperelasticMatrix>>,
         fabric: Arc<WovenFabric>,
     ) -> Result<Laminate, String> {
-        let t_a = positive("[layers] matrix_thickness", self.matrix_thickness)?;
         let t_b = positive("[layers] fabric_thickness", self.fabric_thickness)?;
         if !self.stack.contains(&LayerKind::Fabric) {
             return Err("[layers] stack must contain at least one \"fabric\" layer".into());
         }
+        let matrix_layer = match (self.stack.contains(&LayerKind::Matrix), matrix) {
+            (false, _) => None,
+            (true, None) => {
+                return Err(
+                    "the stack has matrix layers but the card has no [matrix] section".into(),
+                )
+            }
+            (true, Some(law)) => {
+                let thickness = self
+                    .matrix_thickness
+                    .ok_or("[layers] matrix_thickness is missing")?;
+                let t_a = positive("[layers] matrix_thickness", thickness)?;
+                Some(Layer {
+                    law: law as Arc<dyn MaterialLaw>,
+                    thickness: t_a,
+                })
+            }
+        };
         let layers = self
             .stack
             .iter()
-            .map(|kind| match kind {
-                LayerKind::Matrix => Layer {
-                    law: matrix.clone() as Arc<dyn MaterialLaw>,
-                    thickness: t_a,
-                },
-                LayerKind::Fabric => Layer {
+            .map(|kind| match (kind, &matrix_layer) {
+                (LayerKind::Matrix, Some(layer)) => layer.clone(),
+                _ => Layer {
                     law: fabric.clone() as Arc<dyn MaterialLaw>,
                     thickness: t_b,
                 },
@@ -364,6 +383,28 @@ shear = [0.25, 0.0, 2.0]
     fn missing_section_is_an_error() {
         let text = VALID.split("[fabric]").next().unwrap();
         assert!(error_of(text).contains("fabric"));
+    }
+
+    #[test]
+    fn dry_fabric_needs_no_matrix() {
+        let fabric_only = VALID.split("[matrix]").next().unwrap().to_string()
+            + "[fabric]"
+            + VALID.split("[fabric]").nth(1).unwrap();
+        let text = fabric_only
+            .replace("matrix_thickness = 0.04\n", "")
+            .replace(
+                "fabric_thickness = 0.23",
+                "fabric_thickness = 0.23\nstack = [\"fabric\"]",
+            );
+        let card = MaterialCard::from_toml(&text, "dry.toml").unwrap();
+        assert!(card.matrix.is_none());
+        assert_eq!(card.laminate.layers().len(), 1);
+        let missing = fabric_only.replace("matrix_thickness = 0.04\n", "");
+        assert!(
+            error_of(&missing).contains("no [matrix] section"),
+            "{}",
+            error_of(&missing)
+        );
     }
 
     #[test]

@@ -13,6 +13,7 @@ use super::{
     ensure_finite, FibreDirections, MaterialError, MaterialLaw, PointKinematics, ThicknessRule,
 };
 use nalgebra::{Matrix3, Vector3};
+use std::sync::Arc;
 
 /// Tension energy of one yarn family as a function of its stretch.
 #[derive(Clone, Debug, PartialEq)]
@@ -62,6 +63,19 @@ impl YarnTension {
             .sum()
     }
 
+    /// Tangent `d tension / d lambda` (MPa), never below the initial tensile modulus `A_2`: a
+    /// slack yarn may be pulled taut within one step, and the stable step must allow for it.
+    pub fn wave_modulus(&self, stretch: f64) -> f64 {
+        let e = (stretch - 1.0).max(0.0);
+        let tangent: f64 = self
+            .coefficients
+            .iter()
+            .enumerate()
+            .map(|(i, a)| a * (i + 1) as f64 * e.powi(i as i32))
+            .sum();
+        tangent.max(self.coefficients.first().copied().unwrap_or(0.0))
+    }
+
     /// `dW_t/dI = (dW_t/dlambda) / (2 lambda)` with `lambda = sqrt(I)`.
     fn derivative_wrt_invariant(&self, invariant: f64) -> f64 {
         let stretch = invariant.sqrt();
@@ -95,6 +109,16 @@ impl ShearInteraction {
             .iter()
             .enumerate()
             .map(|(i, c)| (i + 1) as f64 * c * i10.powi(i as i32))
+            .sum()
+    }
+
+    /// `W_s''(I10)`.
+    pub fn second_derivative(&self, i10: f64) -> f64 {
+        self.coefficients
+            .iter()
+            .enumerate()
+            .skip(1)
+            .map(|(i, c)| ((i + 1) * i) as f64 * c * i10.powi(i as i32 - 1))
             .sum()
     }
 
@@ -199,6 +223,24 @@ impl MaterialLaw for WovenFabric {
         Ok(dyad(a0, a0) * (2.0 * w4)
             + dyad(b0, b0) * (2.0 * w6)
             + (dyad(a0, b0) + dyad(b0, a0)) * w8)
+    }
+
+    /// The stiffer yarn family, plus the shear stiffness `4 (|W_s'| + |W_s''|)` (a bound on the
+    /// second derivative of `W_s(sin^2 gamma)` in gamma).
+    fn wave_modulus(&self, point: &PointKinematics) -> Result<f64, MaterialError> {
+        let inv = FibreInvariants::of(&point.c, &point.fibres)?;
+        let yarns = self
+            .warp
+            .wave_modulus(inv.i4.sqrt())
+            .max(self.weft.wave_modulus(inv.i6.sqrt()));
+        let i10 = inv.i10();
+        Ok(yarns
+            + 4.0 * (self.shear.derivative(i10).abs() + self.shear.second_derivative(i10).abs()))
+    }
+
+    /// Rate-independent: the same law.
+    fn time_scaled(&self, _speed_up: f64) -> Arc<dyn MaterialLaw> {
+        Arc::new(self.clone())
     }
 
     fn strain_energy(&self, point: &PointKinematics) -> Result<f64, MaterialError> {

@@ -205,6 +205,39 @@ impl Laminate {
         Ok(MembraneResponse { n, thickness })
     }
 
+    /// Thickness-weighted mean of the layers' wave moduli (MPa) in an advanced state: with the
+    /// ply's density it gives the membrane wave speed that sets the stable time step.
+    pub fn wave_modulus(
+        &self,
+        kin: &MembraneKinematics,
+        state: &LaminateState,
+    ) -> Result<f64, MaterialError> {
+        let weighted = self.groups.iter().try_fold(0.0, |sum, group| {
+            let k = group[0];
+            let point =
+                kin.layer_point(state.thickness_stretch[k], state.thickness_stretch_rate[k]);
+            let thickness: f64 = group.iter().map(|&j| self.layers[j].thickness).sum();
+            Ok(sum + thickness * self.layers[k].law.wave_modulus(&point)?)
+        })?;
+        Ok(weighted / self.reference_thickness())
+    }
+
+    /// The laminate for a process run `speed_up` times faster (MODEL.md §6): every law
+    /// time-scaled, layers that shared a law still sharing one.
+    pub fn time_scaled(&self, speed_up: f64) -> Self {
+        let mut layers = self.layers.clone();
+        for group in &self.groups {
+            let scaled = self.layers[group[0]].law.time_scaled(speed_up);
+            for &k in group {
+                layers[k].law = scaled.clone();
+            }
+        }
+        Self {
+            layers,
+            groups: self.groups.clone(),
+        }
+    }
+
     /// 3D stress `S` of layer `k` for the kinematics and a state already advanced to them.
     pub fn layer_stress(
         &self,

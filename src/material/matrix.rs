@@ -12,6 +12,7 @@ use super::{
     ensure_finite, MaterialError, MaterialLaw, PointKinematics, TemperatureTable, ThicknessRule,
 };
 use nalgebra::Matrix3;
+use std::sync::Arc;
 
 /// The matrix parameters at one temperature.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -102,6 +103,22 @@ impl MaterialLaw for ViscoHyperelasticMatrix {
         let j = inv.i3.sqrt();
         let i1_bar = inv.i1 / inv.i3.cbrt();
         Ok(p.c10 * (i1_bar - 3.0) + (j - 1.0).powi(2) / p.d1)
+    }
+
+    /// Plane-stress incompressible neo-Hookean: biaxial modulus `4 mu = 8 C10` at small strain,
+    /// growing roughly with `I1/3`; doubled for safety. The viscous term is left out: at forming
+    /// rates its damping is far below what would shorten the step.
+    fn wave_modulus(&self, point: &PointKinematics) -> Result<f64, MaterialError> {
+        let c10 = self.c10.at(point.temperature)?;
+        Ok(16.0 * c10 * (point.c.trace() / 3.0).max(1.0))
+    }
+
+    /// MODEL.md §6: `eta1 / s`, so the viscous stress at `s` times the rate is unchanged.
+    fn time_scaled(&self, speed_up: f64) -> Arc<dyn MaterialLaw> {
+        Arc::new(Self {
+            eta1: self.eta1.scaled(1.0 / speed_up),
+            ..self.clone()
+        })
     }
 
     /// seed Eq. (6): `psi_v = eta1 J2 (I1 - 3)`, `J2 = tr(Cdot^2) / 2` (Eq. (4)).

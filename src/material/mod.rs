@@ -20,6 +20,7 @@ pub use temperature_table::TemperatureTable;
 
 use nalgebra::{Matrix3, Vector3};
 use std::fmt::Debug;
+use std::sync::Arc;
 
 /// Warp and weft directions `a0`, `b0` in the reference configuration (MODEL.md §1).
 ///
@@ -120,6 +121,15 @@ pub trait MaterialLaw: Debug + Send + Sync {
     fn viscous_potential(&self, _point: &PointKinematics) -> Result<f64, MaterialError> {
         Ok(0.0)
     }
+
+    /// An upper bound of the in-plane tangent modulus at this point (MPa, per unit reference
+    /// area), for the stable time step of explicit dynamics: wave speed `sqrt(modulus / rho)`.
+    fn wave_modulus(&self, point: &PointKinematics) -> Result<f64, MaterialError>;
+
+    /// This law for a process run `speed_up` times faster than the real one (MODEL.md §6,
+    /// time scaling): rate-dependent parameters change so that the response at the scaled
+    /// rate equals the real response at the real rate.
+    fn time_scaled(&self, speed_up: f64) -> Arc<dyn MaterialLaw>;
 }
 
 /// Cauchy stress `sigma = F S F^T / det F`.

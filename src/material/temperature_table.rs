@@ -58,6 +58,14 @@ impl TemperatureTable {
         })
     }
 
+    /// The same table with every value multiplied by `factor`.
+    pub fn scaled(&self, factor: f64) -> Self {
+        Self {
+            values: self.values.iter().map(|v| v * factor).collect(),
+            ..self.clone()
+        }
+    }
+
     pub fn values(&self) -> &[f64] {
         &self.values
     }

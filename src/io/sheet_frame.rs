@@ -1,0 +1,113 @@
+//! The state of a sheet as ParaView fields: what an engineer colours the part by.
+
+use super::vtk::{Field, FieldData};
+use crate::material::fabric::shear_angle;
+use crate::material::{MaterialError, MembraneKinematics};
+use crate::solver::{Model, State};
+use nalgebra::{Matrix2, Matrix3, Vector3};
+
+/// Points, triangles and fields of one frame, owned.
+pub struct SheetFrame {
+    pub points: Vec<[f64; 3]>,
+    pub point_data: Vec<Field>,
+    pub cell_data: Vec<Field>,
+}
+
+fn vector(v: &Vector3<f64>) -> [f64; 3] {
+    [v.x, v.y, v.z]
+}
+
+/// In-plane components xx, yy, xy of a tensor given in global reference coordinates.
+fn in_plane(t: &Matrix3<f64>) -> [f64; 3] {
+    [t[(0, 0)], t[(1, 1)], t[(0, 1)]]
+}
+
+/// Point data: displacement, velocity, reaction. Cell data: shear angle (degrees), current
+/// warp and weft directions, thickness, membrane forces `N` (xx, yy, xy in the reference
+/// x–y axes, N/mm) and each layer's 2nd Piola–Kirchhoff stress (xx, yy, xy, MPa).
+pub fn sheet_frame(model: &Model, state: &State) -> Result<SheetFrame, MaterialError> {
+    let points = state.positions.iter().map(vector).collect();
+    let displacement = state
+        .positions
+        .iter()
+        .zip(&model.mesh.nodes)
+        .map(|(x, x0)| vector(&(x - x0)))
+        .collect();
+    let point_data = vec![
+        Field {
+            name: "displacement".into(),
+            data: FieldData::Vector(displacement),
+        },
+        Field {
+            name: "velocity".into(),
+            data: FieldData::Vector(state.velocities.iter().map(vector).collect()),
+        },
+        Field {
+            name: "reaction".into(),
+            data: FieldData::Vector(state.reactions.iter().map(vector).collect()),
+        },
+    ];
+    let n_layers = model.laminate.layers().len();
+    let mut gamma = Vec::with_capacity(model.elements.len());
+    let mut warp = Vec::with_capacity(model.elements.len());
+    let mut weft = Vec::with_capacity(model.elements.len());
+    let mut membrane = Vec::with_capacity(model.elements.len());
+    let mut layers = vec![Vec::with_capacity(model.elements.len()); n_layers];
+    for (k, e) in model.elements.iter().enumerate() {
+        let f = e.gradient(&state.positions);
+        let f_dot = e.gradient(&state.velocities);
+        let kin = MembraneKinematics::from_deformation(&f, &f_dot, model.temperature, e.fibres);
+        let mut c3 = Matrix3::identity();
+        c3.fixed_view_mut::<2, 2>(0, 0).copy_from(&kin.c);
+        gamma.push(shear_angle(&c3, &e.fibres).to_degrees());
+        let yarn = |d: &Vector3<f64>| vector(&(f * d.xy()).normalize());
+        warp.push(yarn(&e.fibres.warp));
+        weft.push(yarn(&e.fibres.weft));
+        membrane.push(in_plane(&e.to_global(&state.membrane[k].n)));
+        for (layer, out) in layers.iter_mut().enumerate() {
+            let s = model
+                .laminate
+                .layer_stress(layer, &kin, &state.laminate_states[k])?;
+            let s2: Matrix2<f64> = s.fixed_view::<2, 2>(0, 0).into_owned();
+            out.push(in_plane(&e.to_global(&s2)));
+        }
+    }
+    let mut cell_data = vec![
+        Field {
+            name: "shear_angle_deg".into(),
+            data: FieldData::Scalar(gamma),
+        },
+        Field {
+            name: "warp".into(),
+            data: FieldData::Vector(warp),
+        },
+        Field {
+            name: "weft".into(),
+            data: FieldData::Vector(weft),
+        },
+        Field {
+            name: "thickness".into(),
+            data: FieldData::Scalar(state.membrane.iter().map(|m| m.thickness).collect()),
+        },
+        Field {
+            name: "membrane_force_xx_yy_xy".into(),
+            data: FieldData::Vector(membrane),
+        },
+    ];
+    for (k, values) in layers.into_iter().enumerate() {
+        let name = format!(
+            "layer{}_{}_S_xx_yy_xy",
+            k + 1,
+            model.laminate.layers()[k].law.name()
+        );
+        cell_data.push(Field {
+            name,
+            data: FieldData::Vector(values),
+        });
+    }
+    Ok(SheetFrame {
+        points,
+        point_data,
+        cell_data,
+    })
+}

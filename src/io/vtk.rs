@@ -1,0 +1,429 @@
+//! ParaView output: `.vtu` frames of the triangulated sheet and a `.pvd` collection that
+//! strings them into a time series.
+//!
+//! Files are VTK XML `UnstructuredGrid` (version 1.0, little-endian, `UInt64` headers) with
+//! every array inline as base64 binary: exact `Float64` values, a third smaller than ASCII,
+//! and read by ParaView and VTK as they are. Triangles are cell type 5 (`VTK_TRIANGLE`).
+//!
+//! The writer is hand-written rather than taken from the `vtkio` crate: its newest stable
+//! release (0.6.3) depends on `nom` 3 and `quick-xml` 0.22, which Rust already warns "will be
+//! rejected by a future version of Rust", and its default features compile the C library
+//! liblzma. What this module needs — one element type, no compression, no reading — is a
+//! short writer and a base64 encoder.
+//!
+//! Every file is written to `NAME.tmp` and renamed, so a run that stops mid-write leaves
+//! either the old file or the new one, never half of one.
+
+use std::fmt::{self, Display, Write as _};
+use std::path::{Path, PathBuf};
+
+/// `VTK_TRIANGLE` in the VTK cell type table.
+const VTK_TRIANGLE: u8 = 5;
+
+/// Values of one field, per point or per cell.
+#[derive(Clone, Debug, PartialEq)]
+pub enum FieldData {
+    Scalar(Vec<f64>),
+    Vector(Vec<[f64; 3]>),
+}
+
+impl FieldData {
+    /// The number of points or cells the field has values for.
+    pub fn len(&self) -> usize {
+        match self {
+            FieldData::Scalar(v) => v.len(),
+            FieldData::Vector(v) => v.len(),
+        }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    fn components(&self) -> usize {
+        match self {
+            FieldData::Scalar(_) => 1,
+            FieldData::Vector(_) => 3,
+        }
+    }
+
+    /// The values, component after component, point (or cell) after point.
+    fn flat(&self) -> &[f64] {
+        match self {
+            FieldData::Scalar(v) => v,
+            FieldData::Vector(v) => v.as_flattened(),
+        }
+    }
+}
+
+/// A named field; the name is what ParaView shows in its colouring menu.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Field {
+    pub name: String,
+    pub data: FieldData,
+}
+
+/// One frame of a triangulated sheet.
+#[derive(Clone, Copy, Debug)]
+pub struct VtuFrame<'a> {
+    pub points: &'a [[f64; 3]],
+    pub triangles: &'a [[usize; 3]],
+    pub point_data: &'a [Field],
+    pub cell_data: &'a [Field],
+}
+
+/// Whether a value belongs to a point or to a cell (a triangle).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Location {
+    Point,
+    Cell,
+}
+
+impl Display for Location {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Location::Point => "point",
+            Location::Cell => "cell",
+        })
+    }
+}
+
+/// Why a frame or a series could not be written.
+#[derive(Debug, thiserror::Error)]
+pub enum VtkError {
+    #[error("{}: cannot {action}: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        action: &'static str,
+        source: std::io::Error,
+    },
+    #[error("field '{field}': {len} values, but the sheet has {expected} {location}s")]
+    FieldLength {
+        field: String,
+        location: Location,
+        len: usize,
+        expected: usize,
+    },
+    #[error("field '{field}': two {location} fields have this name")]
+    DuplicateField { field: String, location: Location },
+    #[error("field '{field}': the value at {location} {index} is not finite ({value})")]
+    NonFinite {
+        field: String,
+        location: Location,
+        index: usize,
+        value: f64,
+    },
+    #[error(
+        "triangles: triangle {triangle} uses point {point}, but the sheet has {points} points"
+    )]
+    TriangleIndex {
+        triangle: usize,
+        point: usize,
+        points: usize,
+    },
+    #[error("time {time}: not a finite number")]
+    NonFiniteTime { time: f64 },
+    #[error("time {time}: not after the previous frame's time {previous}")]
+    TimeNotIncreasing { time: f64, previous: f64 },
+}
+
+/// Writes one frame as a VTK XML UnstructuredGrid (.vtu) file.
+pub fn write_vtu(path: &Path, frame: &VtuFrame) -> Result<(), VtkError> {
+    let document = vtu_document(frame)?;
+    write_atomically(path, &document)
+}
+
+/// A time series: frames `<dir>/<basename>_0000.vtu, _0001.vtu, ...` and `<dir>/<basename>.pvd`,
+/// which ParaView opens as one animated data set.
+#[derive(Clone, Debug)]
+pub struct PvdSeries {
+    dir: PathBuf,
+    basename: String,
+    /// Time and file name (relative to `dir`) of each frame written so far.
+    frames: Vec<(f64, String)>,
+}
+
+impl PvdSeries {
+    /// Creates `dir` if missing and writes an empty collection there at once, so that an
+    /// unwritable folder stops the run before it starts, and a `.pvd` left by an earlier run
+    /// never lists that run's frames beside this one's.
+    pub fn new(dir: &Path, basename: &str) -> Result<Self, VtkError> {
+        std::fs::create_dir_all(dir).map_err(|source| VtkError::Io {
+            path: dir.to_path_buf(),
+            action: "create the folder",
+            source,
+        })?;
+        let series = Self {
+            dir: dir.to_path_buf(),
+            basename: basename.to_string(),
+            frames: Vec::new(),
+        };
+        series.write_pvd()?;
+        Ok(series)
+    }
+
+    /// Writes the frame and rewrites the `.pvd` at once, so that the files on disk are a valid
+    /// collection of the results so far even if the run stops later. Returns the frame's path.
+    /// Times must be finite and increasing. Should the `.pvd` fail to be written, the frame
+    /// still counts: the next successful call lists it.
+    pub fn add_frame(&mut self, time: f64, frame: &VtuFrame) -> Result<PathBuf, VtkError> {
+        self.check_time(time)?;
+        let name = format!("{}_{:04}.vtu", self.basename, self.frames.len());
+        let path = self.dir.join(&name);
+        write_vtu(&path, frame)?;
+        self.frames.push((time, name));
+        self.write_pvd()?;
+        Ok(path)
+    }
+
+    pub fn pvd_path(&self) -> PathBuf {
+        self.dir.join(format!("{}.pvd", self.basename))
+    }
+
+    pub fn frame_count(&self) -> usize {
+        self.frames.len()
+    }
+
+    fn check_time(&self, time: f64) -> Result<(), VtkError> {
+        if !time.is_finite() {
+            return Err(VtkError::NonFiniteTime { time });
+        }
+        match self.frames.last() {
+            Some(&(previous, _)) if time <= previous => {
+                Err(VtkError::TimeNotIncreasing { time, previous })
+            }
+            _ => Ok(()),
+        }
+    }
+
+    fn write_pvd(&self) -> Result<(), VtkError> {
+        write_atomically(&self.pvd_path(), &pvd_document(&self.frames))
+    }
+}
+
+/// The `.pvd` text listing `frames` (time, relative file name).
+fn pvd_document(frames: &[(f64, String)]) -> String {
+    let mut out = String::from(
+        "<?xml version=\"1.0\"?>\n\
+         <VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n\
+         <Collection>\n",
+    );
+    for (time, file) in frames {
+        // `{:e}` is the shortest text that reads back as the same f64.
+        let _ = writeln!(
+            out,
+            "<DataSet timestep=\"{time:e}\" part=\"0\" file=\"{}\"/>",
+            xml_escape(file)
+        );
+    }
+    out.push_str("</Collection>\n</VTKFile>\n");
+    out
+}
+
+/// The `.vtu` text of `frame`, once it is found consistent.
+fn vtu_document(frame: &VtuFrame) -> Result<String, VtkError> {
+    check_frame(frame)?;
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "<?xml version=\"1.0\"?>\n\
+         <VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" \
+         header_type=\"UInt64\">\n\
+         <UnstructuredGrid>\n\
+         <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">",
+        frame.points.len(),
+        frame.triangles.len()
+    );
+    push_points(&mut out, frame.points);
+    push_cells(&mut out, frame.triangles);
+    push_fields(&mut out, "PointData", frame.point_data);
+    push_fields(&mut out, "CellData", frame.cell_data);
+    out.push_str("</Piece>\n</UnstructuredGrid>\n</VTKFile>\n");
+    Ok(out)
+}
+
+/// Everything that would make a file ParaView misreads, or a panic here.
+fn check_frame(frame: &VtuFrame) -> Result<(), VtkError> {
+    check_finite("points", Location::Point, 3, frame.points.as_flattened())?;
+    check_triangles(frame.triangles, frame.points.len())?;
+    check_fields(frame.point_data, Location::Point, frame.points.len())?;
+    check_fields(frame.cell_data, Location::Cell, frame.triangles.len())
+}
+
+fn check_triangles(triangles: &[[usize; 3]], points: usize) -> Result<(), VtkError> {
+    for (triangle, corners) in triangles.iter().enumerate() {
+        if let Some(&point) = corners.iter().find(|&&p| p >= points) {
+            return Err(VtkError::TriangleIndex {
+                triangle,
+                point,
+                points,
+            });
+        }
+    }
+    Ok(())
+}
+
+fn check_fields(fields: &[Field], location: Location, expected: usize) -> Result<(), VtkError> {
+    for (i, field) in fields.iter().enumerate() {
+        let name = || field.name.clone();
+        if fields[..i].iter().any(|f| f.name == field.name) {
+            return Err(VtkError::DuplicateField {
+                field: name(),
+                location,
+            });
+        }
+        if field.data.len() != expected {
+            return Err(VtkError::FieldLength {
+                field: name(),
+                location,
+                len: field.data.len(),
+                expected,
+            });
+        }
+        check_finite(
+            &field.name,
+            location,
+            field.data.components(),
+            field.data.flat(),
+        )?;
+    }
+    Ok(())
+}
+
+/// `values` holds `components` numbers per point or cell; the error names the point or cell.
+fn check_finite(
+    field: &str,
+    location: Location,
+    components: usize,
+    values: &[f64],
+) -> Result<(), VtkError> {
+    match values.iter().position(|v| !v.is_finite()) {
+        Some(at) => Err(VtkError::NonFinite {
+            field: field.to_string(),
+            location,
+            index: at / components,
+            value: values[at],
+        }),
+        None => Ok(()),
+    }
+}
+
+fn push_points(out: &mut String, points: &[[f64; 3]]) {
+    out.push_str("<Points>\n");
+    push_data_array(
+        out,
+        "Float64",
+        "Points",
+        3,
+        &f64_bytes(points.as_flattened()),
+    );
+    out.push_str("</Points>\n");
+}
+
+/// Connectivity, end offsets (3, 6, 9, ...) and cell types, as VTK lays out cells.
+fn push_cells(out: &mut String, triangles: &[[usize; 3]]) {
+    let connectivity: Vec<u8> = triangles
+        .as_flattened()
+        .iter()
+        .flat_map(|&p| (p as i64).to_le_bytes())
+        .collect();
+    let offsets: Vec<u8> = (1..=triangles.len() as i64)
+        .flat_map(|c| (3 * c).to_le_bytes())
+        .collect();
+    let types = vec![VTK_TRIANGLE; triangles.len()];
+    out.push_str("<Cells>\n");
+    push_data_array(out, "Int64", "connectivity", 1, &connectivity);
+    push_data_array(out, "Int64", "offsets", 1, &offsets);
+    push_data_array(out, "UInt8", "types", 1, &types);
+    out.push_str("</Cells>\n");
+}
+
+fn push_fields(out: &mut String, section: &str, fields: &[Field]) {
+    let _ = writeln!(out, "<{section}>");
+    for field in fields {
+        push_data_array(
+            out,
+            "Float64",
+            &field.name,
+            field.data.components(),
+            &f64_bytes(field.data.flat()),
+        );
+    }
+    let _ = writeln!(out, "</{section}>");
+}
+
+/// One inline binary `DataArray`: base64 of the byte count (`UInt64`) followed by the bytes,
+/// encoded as one stream, as VTK itself writes uncompressed data.
+fn push_data_array(out: &mut String, vtk_type: &str, name: &str, components: usize, bytes: &[u8]) {
+    let _ = writeln!(
+        out,
+        "<DataArray type=\"{vtk_type}\" Name=\"{}\" NumberOfComponents=\"{components}\" \
+         format=\"binary\">",
+        xml_escape(name)
+    );
+    let mut block = (bytes.len() as u64).to_le_bytes().to_vec();
+    block.extend_from_slice(bytes);
+    push_base64(out, &block);
+    out.push_str("\n</DataArray>\n");
+}
+
+fn f64_bytes(values: &[f64]) -> Vec<u8> {
+    values.iter().flat_map(|v| v.to_le_bytes()).collect()
+}
+
+/// Standard base64 (RFC 4648, with `=` padding) of `bytes`, appended to `out`.
+fn push_base64(out: &mut String, bytes: &[u8]) {
+    const ALPHABET: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    out.reserve(bytes.len().div_ceil(3) * 4);
+    for chunk in bytes.chunks(3) {
+        let b = [
+            chunk[0],
+            chunk.get(1).copied().unwrap_or(0),
+            chunk.get(2).copied().unwrap_or(0),
+        ];
+        let triple = u32::from_be_bytes([0, b[0], b[1], b[2]]);
+        for k in 0..4 {
+            if k <= chunk.len() {
+                out.push(ALPHABET[(triple >> (18 - 6 * k) & 0x3f) as usize] as char);
+            } else {
+                out.push('=');
+            }
+        }
+    }
+}
+
+/// `text` made safe inside a double-quoted XML attribute.
+fn xml_escape(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        match c {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            '\'' => out.push_str("&apos;"),
+            c => out.push(c),
+        }
+    }
+    out
+}
+
+/// Writes `text` to `path` through `path.tmp` and a rename.
+fn write_atomically(path: &Path, text: &str) -> Result<(), VtkError> {
+    let mut tmp = path.as_os_str().to_owned();
+    tmp.push(".tmp");
+    let tmp = PathBuf::from(tmp);
+    std::fs::write(&tmp, text).map_err(|source| VtkError::Io {
+        path: tmp.clone(),
+        action: "write the file",
+        source,
+    })?;
+    std::fs::rename(&tmp, path).map_err(|source| {
+        let _ = std::fs::remove_file(&tmp);
+        VtkError::Io {
+            path: path.to_path_buf(),
+            action: "replace the file",
+            source,
+        }
+    })
+}

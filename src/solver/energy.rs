@@ -1,0 +1,35 @@
+//! Energy bookkeeping of an explicit run: what went in, where it is, and the balance.
+
+/// Energies at one instant (N·mm = mJ).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Energies {
+    /// `1/2 sum m v^2`.
+    pub kinetic: f64,
+    /// Work of the internal forces, `sum f_int . du`: stored plus dissipated.
+    pub internal_work: f64,
+    /// Elastic energy stored in the laminate, `sum_e A0 sum_k t_k W_k` (at output instants).
+    pub elastic: f64,
+    /// Work of the reaction forces at the constrained nodes: what the machine put in.
+    pub external_work: f64,
+}
+
+impl Energies {
+    /// Energy dissipated by the matrix viscosity: internal work not stored elastically.
+    pub fn viscous_dissipation(&self) -> f64 {
+        self.internal_work - self.elastic
+    }
+
+    /// `W_ext - W_int - E_kin`: zero for an exact integration.
+    pub fn balance(&self) -> f64 {
+        self.external_work - self.internal_work - self.kinetic
+    }
+
+    /// The balance relative to the external work (0 when nothing was put in yet).
+    pub fn balance_error(&self) -> f64 {
+        if self.external_work.abs() > 0.0 {
+            self.balance().abs() / self.external_work.abs()
+        } else {
+            0.0
+        }
+    }
+}

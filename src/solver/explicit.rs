@@ -1,0 +1,418 @@
+//! Central-difference integration of the sheet (MODEL.md §6).
+//!
+//! Leapfrog with lumped mass: `a_n = -M^-1 f_int(x_n, v_{n-1/2})`,
+//! `v_{n+1/2} = v_{n-1/2} + (dt_{n-1/2} + dt_{n+1/2})/2 a_n`, `x_{n+1} = x_n + dt_{n+1/2} v_{n+1/2}`.
+//! The viscous matrix sees the rate from `v_{n-1/2}`, half a step behind, as usual in explicit
+//! codes. Constrained nodes get their prescribed velocity at `t_{n+1/2}`; their reaction is
+//! `R = f_int + m a`. The step is `safety x min_e(h_e / c_e)` with `h_e` the smallest altitude
+//! and `c_e = sqrt(E_e / rho_e)` from the laminate's current wave modulus, re-evaluated every step.
+
+use super::energy::Energies;
+use super::model::{Model, Motion};
+use crate::material::{LaminateState, MaterialError, MembraneKinematics, MembraneResponse};
+use nalgebra::{Matrix2, Vector3};
+use rayon::prelude::*;
+
+/// How to integrate.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SolverSettings {
+    /// Simulated duration (s).
+    pub end_time: f64,
+    /// Fraction of the critical step actually taken.
+    pub time_step_safety: f64,
+    /// Mass scaling: elements whose stable step is below this get extra density so that it
+    /// reaches it (s). `None`: physical mass.
+    pub target_time_step: Option<f64>,
+    /// Simulated time between two calls of [`Observer::record`] (s).
+    pub output_interval: f64,
+}
+
+/// The integrated state at one instant.
+#[derive(Clone, Debug)]
+pub struct State {
+    pub step: usize,
+    pub time: f64,
+    /// Current positions (mm).
+    pub positions: Vec<Vector3<f64>>,
+    /// Velocities at the last half step (mm/s).
+    pub velocities: Vec<Vector3<f64>>,
+    /// Lumped nodal masses, mass scaling included (tonne).
+    pub masses: Vec<f64>,
+    /// Internal nodal forces (N).
+    pub internal_forces: Vec<Vector3<f64>>,
+    /// Reaction forces at constrained nodes, zero elsewhere (N).
+    pub reactions: Vec<Vector3<f64>>,
+    /// Membrane resultant and thickness per element.
+    pub membrane: Vec<MembraneResponse>,
+    /// Laminate state variables per element.
+    pub laminate_states: Vec<LaminateState>,
+    /// Per-element density after mass scaling (tonne/mm^3).
+    pub densities: Vec<f64>,
+    /// Step that led here (s).
+    pub time_step: f64,
+    pub energies: Energies,
+    /// Mass added by mass scaling (tonne).
+    pub added_mass: f64,
+}
+
+/// Receives the state while the solver runs.
+pub trait Observer {
+    /// At t = 0, every output interval and at the end; an error stops the run.
+    fn record(&mut self, model: &Model, state: &State) -> anyhow::Result<()>;
+    /// Every few hundred steps, for progress reports.
+    fn progress(&mut self, _state: &State) {}
+}
+
+/// Why a run stopped early.
+#[derive(Debug, thiserror::Error)]
+pub enum SolverError {
+    #[error(
+        "the run went unstable at step {step}, t = {time:.6e} s, in element {element}: {reason} \
+         (energies: kinetic {kinetic:.4e}, internal {internal:.4e}, external {external:.4e} N·mm)"
+    )]
+    Unstable {
+        step: usize,
+        time: f64,
+        element: usize,
+        reason: String,
+        kinetic: f64,
+        internal: f64,
+        external: f64,
+    },
+    #[error("bad solver settings: {0}")]
+    Settings(String),
+    #[error("writing results at t = {time:.6e} s: {source:#}")]
+    Output { time: f64, source: anyhow::Error },
+}
+
+/// What the element loop returns per element.
+#[derive(Clone, Copy, Debug, Default)]
+struct ElementResult {
+    forces: [Vector3<f64>; 3],
+    stable_step: f64,
+}
+
+/// Elements around each node, for a race-free parallel gather of nodal forces.
+struct NodeElements {
+    start: Vec<usize>,
+    entries: Vec<(usize, usize)>,
+}
+
+impl NodeElements {
+    fn new(model: &Model) -> Self {
+        let mut count = vec![0usize; model.mesh.nodes.len() + 1];
+        for e in &model.elements {
+            for &n in &e.nodes {
+                count[n + 1] += 1;
+            }
+        }
+        for i in 1..count.len() {
+            count[i] += count[i - 1];
+        }
+        let mut fill = count.clone();
+        let mut entries = vec![(0, 0); count[count.len() - 1]];
+        for (k, e) in model.elements.iter().enumerate() {
+            for (local, &n) in e.nodes.iter().enumerate() {
+                entries[fill[n]] = (k, local);
+                fill[n] += 1;
+            }
+        }
+        Self {
+            start: count,
+            entries,
+        }
+    }
+
+    fn of(&self, node: usize) -> &[(usize, usize)] {
+        &self.entries[self.start[node]..self.start[node + 1]]
+    }
+}
+
+/// What step `n` needs from step `n - 1` for the trapezoidal work sums.
+struct PreviousStep {
+    forces: Vec<Vector3<f64>>,
+    reactions: Vec<Vector3<f64>>,
+    /// `x_n - x_{n-1}`.
+    increments: Vec<Vector3<f64>>,
+    /// `dt_{n-1/2}`.
+    time_step: f64,
+}
+
+/// Integrates `model` to `settings.end_time`, reporting to `observer`. On an instability the
+/// observer has already received everything recorded so far.
+pub fn run(
+    model: &Model,
+    settings: &SolverSettings,
+    observer: &mut dyn Observer,
+) -> Result<State, SolverError> {
+    check_settings(settings)?;
+    let adjacency = NodeElements::new(model);
+    let prescribed = prescribed_motion(model);
+    let mut state = initial_state(model, settings)?;
+    let mut results = vec![ElementResult::default(); model.elements.len()];
+    let zeros = vec![Vector3::zeros(); model.mesh.nodes.len()];
+    let mut previous = PreviousStep {
+        forces: zeros.clone(),
+        reactions: zeros.clone(),
+        increments: zeros,
+        time_step: 0.0,
+    };
+    let mut next_output = 0.0;
+    loop {
+        let stable_step = element_loop(model, &mut state, &mut results, previous.time_step)
+            .map_err(|(element, e)| unstable(&state, element, e.to_string()))?;
+        gather_forces(&adjacency, &results, &mut state.internal_forces);
+        let last = state.time >= settings.end_time;
+        if last || state.time >= next_output - 1e-9 * settings.output_interval {
+            state.energies.elastic = elastic_energy(model, &state)
+                .map_err(|(element, e)| unstable(&state, element, e.to_string()))?;
+            observer
+                .record(model, &state)
+                .map_err(|source| SolverError::Output {
+                    time: state.time,
+                    source,
+                })?;
+            next_output += settings.output_interval;
+        }
+        if last {
+            return Ok(state);
+        }
+        let dt = (settings.time_step_safety * stable_step).min(settings.end_time - state.time);
+        advance(model, &prescribed, &mut state, dt, &mut previous);
+        if let Some(node) = state
+            .positions
+            .iter()
+            .position(|x| !x.iter().all(|c| c.is_finite()))
+        {
+            let element = adjacency.of(node).first().map_or(0, |&(e, _)| e);
+            return Err(unstable(
+                &state,
+                element,
+                format!("node {node} has a non-finite position"),
+            ));
+        }
+        state.time_step = dt;
+        state.time = if dt == settings.end_time - state.time {
+            settings.end_time
+        } else {
+            state.time + dt
+        };
+        state.step += 1;
+        if state.step % 200 == 0 {
+            observer.progress(&state);
+        }
+    }
+}
+
+/// Step `n -> n+1` of every node: velocity (free, or prescribed at `t_{n+1/2}`), reaction,
+/// kinetic energy at `t_n` and the work sums up to `t_n`, then the position.
+fn advance(
+    model: &Model,
+    prescribed: &[Option<&Motion>],
+    state: &mut State,
+    dt: f64,
+    previous: &mut PreviousStep,
+) {
+    let dt_mean = 0.5 * (previous.time_step + dt);
+    let t_half = state.time + 0.5 * dt;
+    let (mut kinetic, mut internal, mut external) = (0.0, 0.0, 0.0);
+    for (a, motion) in prescribed.iter().enumerate() {
+        let m = state.masses[a];
+        let f = state.internal_forces[a];
+        let v_old = state.velocities[a];
+        let v_new = match motion {
+            None => v_old - f * (dt_mean / m),
+            Some(Motion::Fixed) => Vector3::zeros(),
+            Some(Motion::Velocity(field)) => field(t_half, &model.mesh.nodes[a]),
+        };
+        let reaction = match motion {
+            None => Vector3::zeros(),
+            Some(_) => f + (v_new - v_old) * (m / dt_mean),
+        };
+        kinetic += 0.5 * m * (0.5 * (v_old + v_new)).norm_squared();
+        internal += 0.5 * (previous.forces[a] + f).dot(&previous.increments[a]);
+        external += 0.5 * (previous.reactions[a] + reaction).dot(&previous.increments[a]);
+        let increment = v_new * dt;
+        state.velocities[a] = v_new;
+        state.reactions[a] = reaction;
+        state.positions[a] += increment;
+        previous.forces[a] = f;
+        previous.reactions[a] = reaction;
+        previous.increments[a] = increment;
+    }
+    previous.time_step = dt;
+    state.energies.kinetic = kinetic;
+    state.energies.internal_work += internal;
+    state.energies.external_work += external;
+}
+
+/// `f_int` at each node: the sum of its elements' contributions, gathered node by node so
+/// that threads never write to the same place.
+fn gather_forces(adjacency: &NodeElements, results: &[ElementResult], forces: &mut [Vector3<f64>]) {
+    forces.par_iter_mut().enumerate().for_each(|(node, f)| {
+        *f = adjacency
+            .of(node)
+            .iter()
+            .map(|&(e, local)| results[e].forces[local])
+            .sum();
+    });
+}
+
+/// Elastic energy stored in the sheet, `sum_e A0 sum_k t_k W_k`.
+fn elastic_energy(model: &Model, state: &State) -> Result<f64, (usize, MaterialError)> {
+    model
+        .elements
+        .par_iter()
+        .enumerate()
+        .map(|(k, e)| {
+            let f = e.gradient(&state.positions);
+            let f_dot = e.gradient(&state.velocities);
+            let kin = MembraneKinematics::from_deformation(&f, &f_dot, model.temperature, e.fibres);
+            let w = model
+                .laminate
+                .stored_energy(&kin, &state.laminate_states[k])
+                .map_err(|err| (k, err))?;
+            Ok(e.area * w)
+        })
+        .try_reduce(|| 0.0, |a, b| Ok(a + b))
+}
+
+fn check_settings(s: &SolverSettings) -> Result<(), SolverError> {
+    let positive = |name: &str, v: f64| {
+        if v.is_finite() && v > 0.0 {
+            Ok(())
+        } else {
+            Err(SolverError::Settings(format!("{name} = {v} must be > 0")))
+        }
+    };
+    positive("end time", s.end_time)?;
+    positive("output interval", s.output_interval)?;
+    positive("time-step safety factor", s.time_step_safety)?;
+    if s.time_step_safety > 1.0 {
+        return Err(SolverError::Settings(format!(
+            "time-step safety factor {} must not exceed 1",
+            s.time_step_safety
+        )));
+    }
+    if let Some(target) = s.target_time_step {
+        positive("target time step", target)?;
+    }
+    Ok(())
+}
+
+fn unstable(state: &State, element: usize, reason: String) -> SolverError {
+    SolverError::Unstable {
+        step: state.step,
+        time: state.time,
+        element,
+        reason,
+        kinetic: state.energies.kinetic,
+        internal: state.energies.internal_work,
+        external: state.energies.external_work,
+    }
+}
+
+/// Per node: `None` when free, else the constraint's motion.
+fn prescribed_motion(model: &Model) -> Vec<Option<&Motion>> {
+    let mut motion = vec![None; model.mesh.nodes.len()];
+    for c in &model.constraints {
+        for &n in &c.nodes {
+            motion[n] = Some(&c.motion);
+        }
+    }
+    motion
+}
+
+/// Rest state, lumped masses, and mass scaling from the stable step at rest.
+fn initial_state(model: &Model, settings: &SolverSettings) -> Result<State, SolverError> {
+    let n_nodes = model.mesh.nodes.len();
+    let laminate = &model.laminate;
+    let thickness = laminate.reference_thickness();
+    let mut densities = vec![model.density; model.elements.len()];
+    let mut added_mass = 0.0;
+    for (k, e) in model.elements.iter().enumerate() {
+        let kin = rest_kinematics(model, k);
+        let modulus = laminate
+            .wave_modulus(&kin, &laminate.initial_state())
+            .map_err(|err| SolverError::Settings(format!("element {k}: {err}")))?;
+        let step = e.altitude * (model.density / modulus).sqrt();
+        if let Some(target) = settings.target_time_step {
+            if step < target {
+                densities[k] = model.density * (target / step).powi(2);
+                added_mass += (densities[k] - model.density) * thickness * e.area;
+            }
+        }
+    }
+    let mut masses = vec![0.0; n_nodes];
+    for (e, rho) in model.elements.iter().zip(&densities) {
+        for &n in &e.nodes {
+            masses[n] += rho * thickness * e.area / 3.0;
+        }
+    }
+    Ok(State {
+        step: 0,
+        time: 0.0,
+        positions: model.mesh.nodes.clone(),
+        velocities: vec![Vector3::zeros(); n_nodes],
+        masses,
+        internal_forces: vec![Vector3::zeros(); n_nodes],
+        reactions: vec![Vector3::zeros(); n_nodes],
+        membrane: vec![
+            MembraneResponse {
+                n: Matrix2::zeros(),
+                thickness
+            };
+            model.elements.len()
+        ],
+        laminate_states: vec![laminate.initial_state(); model.elements.len()],
+        densities,
+        time_step: 0.0,
+        energies: Energies::default(),
+        added_mass,
+    })
+}
+
+fn rest_kinematics(model: &Model, k: usize) -> MembraneKinematics {
+    MembraneKinematics {
+        c: Matrix2::identity(),
+        c_dot: Matrix2::zeros(),
+        temperature: model.temperature,
+        fibres: model.elements[k].fibres,
+    }
+}
+
+/// Membrane forces of every element at the current positions (in parallel), and the stable
+/// step they allow. `dt` is the duration of the step that led here (for the thickness rate).
+fn element_loop(
+    model: &Model,
+    state: &mut State,
+    results: &mut [ElementResult],
+    dt: f64,
+) -> Result<f64, (usize, MaterialError)> {
+    let positions = &state.positions;
+    let velocities = &state.velocities;
+    let densities = &state.densities;
+    let laminate = &model.laminate;
+    results
+        .par_iter_mut()
+        .zip(state.laminate_states.par_iter_mut())
+        .zip(state.membrane.par_iter_mut())
+        .enumerate()
+        .map(|(k, ((result, lam_state), membrane))| {
+            let e = &model.elements[k];
+            let f = e.gradient(positions);
+            let f_dot = e.gradient(velocities);
+            let kin = MembraneKinematics::from_deformation(&f, &f_dot, model.temperature, e.fibres);
+            let response = laminate
+                .membrane_response(&kin, dt, lam_state)
+                .map_err(|err| (k, err))?;
+            let modulus = laminate
+                .wave_modulus(&kin, lam_state)
+                .map_err(|err| (k, err))?;
+            *membrane = response;
+            result.forces = e.internal_forces(&f, &response.n);
+            result.stable_step = e.altitude * (densities[k] / modulus).sqrt();
+            Ok(result.stable_step)
+        })
+        .try_reduce(|| f64::INFINITY, |a, b| Ok(a.min(b)))
+}

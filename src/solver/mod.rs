@@ -1,0 +1,10 @@
+//! Explicit dynamics of the sheet (MODEL.md §6): central differences with lumped mass, stable
+//! step from the current wave speed, optional mass scaling, energy bookkeeping.
+
+pub mod energy;
+pub mod explicit;
+pub mod model;
+
+pub use energy::Energies;
+pub use explicit::{run, Observer, SolverError, SolverSettings, State};
+pub use model::{Constraint, Model, Motion};

@@ -1,0 +1,138 @@
+//! What the solver integrates: the meshed sheet, its laminate, and the constraints.
+
+use crate::element::membrane_triangle::ElementError;
+use crate::element::MembraneTriangle;
+use crate::material::Laminate;
+use crate::mesh::{Mesh, MeshError};
+use nalgebra::Vector3;
+use std::sync::Arc;
+
+/// Velocity of a constrained node at time `t` given its reference position.
+pub type VelocityField = Arc<dyn Fn(f64, &Vector3<f64>) -> Vector3<f64> + Send + Sync>;
+
+/// How the nodes of a constraint move.
+#[derive(Clone)]
+pub enum Motion {
+    /// Held in place.
+    Fixed,
+    /// Moved with a prescribed velocity (all three components).
+    Velocity(VelocityField),
+}
+
+impl std::fmt::Debug for Motion {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Motion::Fixed => write!(f, "Fixed"),
+            Motion::Velocity(_) => write!(f, "Velocity(..)"),
+        }
+    }
+}
+
+/// A named group of nodes whose motion is prescribed; its reaction force is reported.
+#[derive(Clone, Debug)]
+pub struct Constraint {
+    pub name: String,
+    pub nodes: Vec<usize>,
+    pub motion: Motion,
+}
+
+/// A blank ready to be integrated.
+#[derive(Clone, Debug)]
+pub struct Model {
+    pub mesh: Mesh,
+    pub elements: Vec<MembraneTriangle>,
+    pub laminate: Laminate,
+    /// Density of the ply (tonne/mm^3).
+    pub density: f64,
+    /// Isothermal temperature of the run (°C).
+    pub temperature: f64,
+    pub constraints: Vec<Constraint>,
+}
+
+/// Why a model cannot be built.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ModelError {
+    #[error("mesh: {0}")]
+    Mesh(#[from] MeshError),
+    #[error("element {element}: {error}")]
+    Element { element: usize, error: ElementError },
+    #[error("node {node} belongs to constraints '{first}' and '{second}'")]
+    DoublyConstrained {
+        node: usize,
+        first: String,
+        second: String,
+    },
+    #[error("constraint '{name}' names node {node}, but the mesh has {nodes} nodes")]
+    UnknownNode {
+        name: String,
+        node: usize,
+        nodes: usize,
+    },
+    #[error("node {0} belongs to no triangle: it would have no mass")]
+    OrphanNode(usize),
+    #[error("density {0} must be > 0")]
+    Density(f64),
+}
+
+impl Model {
+    /// Builds the elements of `mesh` with the warp along `warp_direction` projected on each.
+    pub fn new(
+        mesh: Mesh,
+        laminate: Laminate,
+        density: f64,
+        temperature: f64,
+        warp_direction: Vector3<f64>,
+        constraints: Vec<Constraint>,
+    ) -> Result<Self, ModelError> {
+        mesh.validate()?;
+        if !(density.is_finite() && density > 0.0) {
+            return Err(ModelError::Density(density));
+        }
+        let elements = mesh
+            .triangles
+            .iter()
+            .enumerate()
+            .map(|(element, &nodes)| {
+                MembraneTriangle::new(nodes, nodes.map(|n| mesh.nodes[n]), &warp_direction)
+                    .map_err(|error| ModelError::Element { element, error })
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let mut used = vec![false; mesh.nodes.len()];
+        for t in &mesh.triangles {
+            for &n in t {
+                used[n] = true;
+            }
+        }
+        if let Some(node) = used.iter().position(|u| !u) {
+            return Err(ModelError::OrphanNode(node));
+        }
+        let mut owner: Vec<Option<usize>> = vec![None; mesh.nodes.len()];
+        for (c, constraint) in constraints.iter().enumerate() {
+            for &node in &constraint.nodes {
+                if node >= owner.len() {
+                    return Err(ModelError::UnknownNode {
+                        name: constraint.name.clone(),
+                        node,
+                        nodes: owner.len(),
+                    });
+                }
+                if let Some(first) = owner[node] {
+                    return Err(ModelError::DoublyConstrained {
+                        node,
+                        first: constraints[first].name.clone(),
+                        second: constraint.name.clone(),
+                    });
+                }
+                owner[node] = Some(c);
+            }
+        }
+        Ok(Self {
+            mesh,
+            elements,
+            laminate,
+            density,
+            temperature,
+            constraints,
+        })
+    }
+}
