@@ -49,6 +49,7 @@ fn homogeneous_run(g: Matrix3<f64>, end_time: f64, angle: f64) -> (Model, State)
         time_step_safety: 0.9,
         target_time_step: None,
         output_interval: end_time,
+        damping: 0.0,
     };
     let mut last = Last(None);
     solver::run(&model, &settings, &mut last).unwrap();
@@ -142,6 +143,7 @@ fn spurious_strain_after_rotation(axis: Vector3<f64>, safety: f64) -> f64 {
         time_step_safety: safety,
         target_time_step: None,
         output_interval: 1e-4,
+        damping: 0.0,
     };
     let mut last = Last(None);
     solver::run(&model, &settings, &mut last).unwrap();
@@ -169,5 +171,108 @@ fn rigid_rotation_gives_no_stress() {
         let fine = spurious_strain_after_rotation(axis, 0.45);
         assert!(coarse < 1e-5, "spurious strain {coarse:e} about {axis}");
         assert!(fine < 0.35 * coarse, "second order: {coarse:e} -> {fine:e}");
+    }
+}
+
+/// The step the solver takes, `0.9 x altitude x sqrt(rho / E_wave)`, stays below the exact
+/// critical step `2 / omega_max` of a lone element with lumped mass (which bounds that of any
+/// mesh), for stiff yarns along, across and at 45° to the edges.
+#[test]
+fn stable_step_is_below_the_critical_step_of_the_element() {
+    use nalgebra::{DMatrix, Vector2};
+    use thermostamp::element::MembraneTriangle;
+    let card =
+        thermostamp::material::MaterialCard::load(&repo_path("tests/data/stiff-yarn-fabric.toml"))
+            .unwrap();
+    let laminate = card.laminate;
+    let t = laminate.reference_thickness();
+    let shapes = [
+        [
+            Vector2::new(0.0, 0.0),
+            Vector2::new(2.0, 0.0),
+            Vector2::new(1.0, 1.0),
+        ], // crossed cell
+        [
+            Vector2::new(0.0, 0.0),
+            Vector2::new(1.0, 0.0),
+            Vector2::new(0.0, 1.0),
+        ], // right
+        [
+            Vector2::new(0.0, 0.0),
+            Vector2::new(1.0, 0.0),
+            Vector2::new(0.5, 0.866),
+        ], // equilateral
+        [
+            Vector2::new(0.0, 0.0),
+            Vector2::new(3.0, 0.0),
+            Vector2::new(0.4, 0.7),
+        ], // skewed
+    ];
+    for (shape, gamma_deg) in shapes
+        .iter()
+        .flat_map(|s| [0.0, 20.0, 40.0].map(move |g| (*s, g)))
+    {
+        for angle_deg in [0.0, 30.0, 45.0, 90.0] {
+            let angle = f64::to_radians(angle_deg);
+            let x_ref = shape.map(|p| Vector3::new(p.x, p.y, 0.0));
+            // sheared like a bias-extension zone: yarns at +-45° turned towards each other
+            let g = f64::to_radians(gamma_deg);
+            let shear = rotation([0.0, 0.0, std::f64::consts::FRAC_PI_4])
+                * trellis(g, 1.002, 1.002, 1.0)
+                * rotation([0.0, 0.0, -std::f64::consts::FRAC_PI_4]);
+            let x0 = x_ref.map(|x| shear * x);
+            let e = MembraneTriangle::new(
+                [0, 1, 2],
+                x_ref,
+                &Vector3::new(angle.cos(), angle.sin(), 0.0),
+            )
+            .unwrap();
+            let forces = |x: &[Vector3<f64>]| {
+                let f = e.gradient(x);
+                let kin = MembraneKinematics::from_deformation(
+                    &f,
+                    &nalgebra::Matrix3x2::zeros(),
+                    20.0,
+                    e.fibres,
+                );
+                let n = laminate
+                    .membrane_response(&kin, 0.0, &mut laminate.initial_state())
+                    .unwrap()
+                    .n;
+                e.internal_forces(&f, &n)
+            };
+            // in-plane stiffness by central differences at rest
+            let h = 1e-7;
+            let mut k = DMatrix::zeros(6, 6);
+            for j in 0..6 {
+                let (node, dir) = (j / 2, j % 2);
+                let mut plus = x0.to_vec();
+                let mut minus = x0.to_vec();
+                plus[node][dir] += h;
+                minus[node][dir] -= h;
+                let (fp, fm) = (forces(&plus), forces(&minus));
+                for i in 0..6 {
+                    k[(i, j)] = (fp[i / 2][i % 2] - fm[i / 2][i % 2]) / (2.0 * h);
+                }
+            }
+            let mass = card.density * t * e.area / 3.0;
+            let k_sym = (&k + k.transpose()) * (0.5 / mass);
+            let omega_max = k_sym.symmetric_eigenvalues().max().sqrt();
+            let critical = 2.0 / omega_max;
+            let kin = MembraneKinematics {
+                c: Matrix2::identity(),
+                c_dot: Matrix2::zeros(),
+                temperature: 20.0,
+                fibres: e.fibres,
+            };
+            let modulus = laminate
+                .wave_modulus(&kin, &laminate.initial_state())
+                .unwrap();
+            let taken = 0.9 * e.altitude * (card.density / modulus).sqrt();
+            assert!(
+                taken < critical,
+                "{angle_deg}° on {shape:?}: step {taken:e} >= critical {critical:e}"
+            );
+        }
     }
 }

@@ -1,10 +1,13 @@
 //! The `thermostamp` command line.
 //!
-//! Exit codes: 0 success; 2 bad input (usage, files, values, or a history the material cannot
-//! follow), with a one-line message on standard error.
+//! Exit codes: 0 success; 1 a simulation that went unstable (the results so far are kept);
+//! 2 bad input (usage, files, values, or a history the material cannot follow). Errors are
+//! one line on standard error.
 
 mod material_point;
+mod virtual_test;
 
+use crate::solver::SolverError;
 use clap::{Parser, Subcommand};
 
 #[derive(Parser, Debug)]
@@ -25,6 +28,9 @@ struct Cli {
 enum Command {
     /// Drive one material point through a deformation history and print its stress as CSV.
     MaterialPoint(material_point::Args),
+    /// Virtual material tests of a sheet, run with the explicit solver.
+    #[command(subcommand)]
+    Test(virtual_test::TestCommand),
 }
 
 /// Runs the command line and returns the process exit code.
@@ -38,12 +44,17 @@ pub fn main() -> i32 {
     };
     let result = match cli.command {
         Command::MaterialPoint(args) => material_point::run(&args),
+        Command::Test(command) => virtual_test::run(&command),
     };
     match result {
         Ok(()) => 0,
         Err(e) => {
             eprintln!("error: {}", one_line(&format!("{e:#}")));
-            2
+            if e.downcast_ref::<SolverError>().is_some() {
+                1
+            } else {
+                2
+            }
         }
     }
 }

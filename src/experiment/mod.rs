@@ -1,4 +1,6 @@
 //! Virtual material tests: deformation histories imposed on the material models.
 
+pub mod bias_extension;
 pub mod kinematics;
 pub mod material_point;
+pub mod sheet_test;

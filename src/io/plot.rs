@@ -5,12 +5,13 @@
 //! is drawn into memory and encoded with the `png` crate, so that every I/O failure can name
 //! the file.
 
+use ab_glyph::FontRef;
+use backend::PlotBackend;
 use plotters::chart::SeriesAnno;
+use plotters::coord::ranged1d::{KeyPointHint, NoDefaultFormatting, Ranged, ValueFormatter};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::{register_font, FontStyle};
-use std::fs::File;
-use std::io::BufWriter;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
@@ -56,7 +57,7 @@ pub enum PlotError {
     Empty { title: String },
     #[error("plot '{title}': none of its {count} points is finite")]
     NoFinitePoints { title: String, count: usize },
-    #[error("plot '{title}': {width} x {height} pixels is not a usable size (from {MIN_WIDTH} x {MIN_HEIGHT} to {MAX_SIDE} x {MAX_SIDE})")]
+    #[error("plot '{title}': {width} x {height} px is outside {MIN_WIDTH} x {MIN_HEIGHT}..{MAX_SIDE} x {MAX_SIDE}")]
     Size {
         title: String,
         width: u32,
@@ -81,8 +82,12 @@ pub enum PlotError {
 /// Smallest picture that still has room for the title, labels and a legible plotting area.
 const MIN_WIDTH: u32 = 240;
 const MIN_HEIGHT: u32 = 180;
-/// Largest side accepted: keeps the in-memory RGB buffer (3 bytes a pixel) below 200 MB.
-const MAX_SIDE: u32 = 8192;
+/// Largest side accepted: keeps the supersampled RGB buffer (3 bytes a pixel) near 200 MB.
+const MAX_SIDE: u32 = 4096;
+
+/// plotters draws lines and markers without anti-aliasing; drawing at this many times the
+/// size and averaging each block of pixels smooths curves that would otherwise look stepped.
+const SUPERSAMPLE: u32 = 2;
 
 /// The size the text and margins are designed for; other sizes scale them.
 const DESIGN_SIZE: (f64, f64) = (900.0, 600.0);
@@ -106,6 +111,9 @@ const PALETTE: [RGBColor; 10] = [
 const FONT_FAMILY: &str = "sans-serif";
 const FONT_BYTES: &[u8] = include_bytes!("../../assets/fonts/LiberationSans-Regular.ttf");
 
+/// A tick closer to zero than this many steps is zero, off by rounding.
+const ZERO_TICK: f64 = 1e-6;
+
 /// Fraction of the data span added on each side of the axes, so curves do not touch the frame.
 const MARGIN: f64 = 0.04;
 
@@ -113,15 +121,18 @@ const MARGIN: f64 = 0.04;
 pub fn write_png(path: &Path, plot: &LinePlot, width: u32, height: u32) -> Result<(), PlotError> {
     check_size(plot, width, height)?;
     let series = finite_series(plot)?;
-    register_embedded_font()?;
-    let mut rgb = vec![255u8; 3 * width as usize * height as usize];
+    let font = embedded_font()?;
+    let (fine_width, fine_height) = (SUPERSAMPLE * width, SUPERSAMPLE * height);
+    let mut fine = vec![255u8; 3 * fine_width as usize * fine_height as usize];
     {
-        let root = BitMapBackend::with_buffer(&mut rgb, (width, height)).into_drawing_area();
+        let bitmap = BitMapBackend::with_buffer(&mut fine, (fine_width, fine_height));
+        let root = PlotBackend { bitmap, font }.into_drawing_area();
         draw(&root, plot, &series).map_err(|message| PlotError::Draw {
             title: plot.title.clone(),
             message,
         })?;
     }
+    let rgb = downsample(&fine, fine_width as usize, SUPERSAMPLE as usize);
     encode_png(path, &rgb, width, height)
 }
 
@@ -166,21 +177,22 @@ fn finite_series(plot: &LinePlot) -> Result<Vec<Vec<(f64, f64)>>, PlotError> {
     Ok(finite)
 }
 
-/// plotters keeps fonts in a process-wide table; registering once is enough.
-fn register_embedded_font() -> Result<(), PlotError> {
-    static REGISTERED: OnceLock<bool> = OnceLock::new();
-    let ok = *REGISTERED
-        .get_or_init(|| register_font(FONT_FAMILY, FontStyle::Normal, FONT_BYTES).is_ok());
-    if ok {
-        Ok(())
-    } else {
-        Err(PlotError::Font)
-    }
+/// The embedded font, parsed once and registered once with plotters, which keeps fonts in a
+/// process-wide table and sizes legends with it.
+fn embedded_font() -> Result<FontRef<'static>, PlotError> {
+    static FONT: OnceLock<Option<FontRef<'static>>> = OnceLock::new();
+    FONT.get_or_init(|| {
+        let font = FontRef::try_from_slice(FONT_BYTES).ok()?;
+        register_font(FONT_FAMILY, FontStyle::Normal, FONT_BYTES).ok()?;
+        Some(font)
+    })
+    .clone()
+    .ok_or(PlotError::Font)
 }
 
 /// Draws frame, grid, curves and legend; `series` holds the finite points of `plot.series`.
 fn draw(
-    root: &DrawingArea<BitMapBackend, Shift>,
+    root: &DrawingArea<PlotBackend, Shift>,
     plot: &LinePlot,
     series: &[Vec<(f64, f64)>],
 ) -> Result<(), String> {
@@ -191,15 +203,30 @@ fn draw(
 
     root.fill(&WHITE).map_err(|e| e.to_string())?;
     let all = series.iter().flatten().copied();
-    let x_range = padded_range(all.clone().map(|(x, _)| x));
-    let y_range = padded_range(all.map(|(_, y)| y));
+    // About one tick every 110 design pixels across and 85 up, room for labels like "-1.5e-6".
+    let ticks = |pixels: u32, spacing: f64| (f64::from(pixels) / scale / spacing).clamp(3.0, 12.0);
+    let x_axis = Axis::new(
+        padded_range(all.clone().map(|(x, _)| x)),
+        ticks(width, 110.0),
+    );
+    let y_axis = Axis::new(padded_range(all.map(|(_, y)| y)), ticks(height, 85.0));
+
+    // Room left of the plot for the widest tick label, the tick marks and the rotated label.
+    let tick_style = TextStyle::from(font(15.0).into_font());
+    let widest_tick = y_axis
+        .major
+        .iter()
+        .map(|v| root.estimate_text_size(&y_axis.format_ext(v), &tick_style))
+        .try_fold(0, |widest, size| size.map(|(w, _)| widest.max(w)))
+        .map_err(|e| e.to_string())?;
+    let legend_corner = emptiest_corner(series, &x_axis.range, &y_axis.range);
 
     let mut chart = ChartBuilder::on(root)
         .caption(&plot.title, font(24.0))
         .margin(px(16.0))
         .x_label_area_size(px(56.0))
-        .y_label_area_size(px(88.0))
-        .build_cartesian_2d(x_range.clone(), y_range.clone())
+        .y_label_area_size(widest_tick + px(44.0))
+        .build_cartesian_2d(x_axis, y_axis)
         .map_err(|e| e.to_string())?;
     chart
         .configure_mesh()
@@ -207,20 +234,26 @@ fn draw(
         .y_desc(&plot.y_label)
         .axis_desc_style(font(18.0))
         .label_style(font(15.0))
-        .x_labels(10)
-        .y_labels(8)
-        .bold_line_style(RGBColor(215, 215, 215).stroke_width(1))
-        .light_line_style(RGBColor(240, 240, 240).stroke_width(1))
-        .axis_style(BLACK.stroke_width(1))
+        .set_all_tick_mark_size(px(5.0))
+        .bold_line_style(RGBColor(220, 220, 220).stroke_width(px(1.0)))
+        .light_line_style(RGBColor(240, 240, 240).stroke_width(px(1.0)))
+        .axis_style(BLACK.stroke_width(px(1.0)))
         .draw()
         .map_err(|e| e.to_string())?;
 
-    let line_width = px(2.0);
+    let line_width = px(2.5);
+    let legend_size = px(24.0) as i32;
     for (index, (meta, points)) in plot.series.iter().zip(series).enumerate() {
         let color = PALETTE[index % PALETTE.len()];
         let style = color.stroke_width(line_width);
-        let legend_size = px(24.0) as i32;
-        let drawn = match meta.style {
+        // A line through a single point (or the same point repeated) would draw nothing:
+        // show that point as a dot.
+        let shape = if points.windows(2).all(|pair| pair[0] == pair[1]) {
+            LineStyle::Markers
+        } else {
+            meta.style
+        };
+        let drawn = match shape {
             LineStyle::Solid => chart.draw_series(LineSeries::new(points.iter().copied(), style)),
             LineStyle::Dashed => chart.draw_series(DashedLineSeries::new(
                 points.iter().copied(),
@@ -238,11 +271,18 @@ fn draw(
         set_legend(drawn, &meta.label, meta.style, legend_size, style);
     }
 
+    // Close the frame on the top and right, where plotters draws no axis.
+    let (columns, rows) = chart.plotting_area().get_pixel_range();
+    root.draw(&Rectangle::new(
+        [(columns.start, rows.start), (columns.end - 1, rows.end - 1)],
+        BLACK.stroke_width(px(1.0)),
+    ))
+    .map_err(|e| e.to_string())?;
+
     if plot.series.len() > 1 {
-        let corner = emptiest_corner(series, &x_range, &y_range);
         chart
             .configure_series_labels()
-            .position(corner)
+            .position(legend_corner)
             .margin(px(12.0))
             .legend_area_size(px(30.0))
             .label_font(font(15.0))
@@ -296,11 +336,151 @@ fn padded_range(values: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
     } else {
         1.0
     };
-    (mid - half).max(f64::MIN)..(mid + half).min(f64::MAX)
+    let range = (mid - half).max(f64::MIN)..(mid + half).min(f64::MAX);
+    if range.start < range.end {
+        range
+    } else {
+        // Values so small (subnormal) that 5 % of them rounds to nothing.
+        -1.0..1.0
+    }
 }
 
-/// The corner of the plotting area (a quarter of its width by a third of its height) that
-/// holds the fewest points, where the legend hides the least of the curves.
+/// One axis of the chart: its range, and ticks at round numbers `step` apart with finer ones
+/// for a light grid. It writes its own tick labels, so that they carry the decimals the step
+/// needs (plotters' default writes 2e-7 as "0.0").
+struct Axis {
+    range: std::ops::Range<f64>,
+    step: f64,
+    /// Labels in scientific notation: the axis reaches 1e5, or stays below 1e-3.
+    scientific: bool,
+    /// Decimals of every label (of the mantissa, in scientific notation).
+    decimals: usize,
+    major: Vec<f64>,
+    minor: Vec<f64>,
+}
+
+impl Axis {
+    /// Ticks at multiples of 1, 2 or 5 times a power of ten, about `target` of them.
+    fn new(range: std::ops::Range<f64>, target: f64) -> Self {
+        // Halves, as in `padded_range`, so that a span near f64::MAX does not overflow.
+        let raw = (range.end / 2.0 - range.start / 2.0) / (target / 2.0);
+        let magnitude = 10f64.powf(raw.log10().floor());
+        // The round step that gives the number of ticks closest to the target.
+        let (step, parts) = [(1.0, 5.0), (2.0, 4.0), (5.0, 5.0), (10.0, 5.0)]
+            .into_iter()
+            .map(|(mantissa, parts)| (mantissa * magnitude, parts))
+            .min_by(|a, b| (raw / a.0 - 1.0).abs().total_cmp(&(raw / b.0 - 1.0).abs()))
+            .unwrap_or((magnitude, 5.0));
+        let major = multiples(&range, step);
+        let largest = major.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let scientific = largest >= 1e5 || (largest > 0.0 && largest < 1e-3);
+        // The same decimals on every label: those the step needs, in scientific notation next
+        // to the smallest tick's leading digit.
+        let decimals = if scientific {
+            major
+                .iter()
+                .filter(|v| v.abs() >= ZERO_TICK * step)
+                .map(|&v| decimals_needed(step / 10f64.powf(exponent_of(v))))
+                .max()
+                .unwrap_or(0)
+        } else {
+            decimals_needed(step)
+        };
+        let minor = multiples(&range, step / parts)
+            .into_iter()
+            .filter(|v| (v / step - (v / step).round()).abs() > 1e-6)
+            .collect();
+        Self {
+            scientific,
+            decimals,
+            major,
+            minor,
+            range,
+            step,
+        }
+    }
+
+    /// A tick value, written as the axis asks.
+    fn label(&self, value: f64) -> String {
+        let decimals = self.decimals;
+        if value.abs() < ZERO_TICK * self.step {
+            // A multiple of the step that should be zero but carries a rounding error.
+            if self.scientific {
+                "0".to_string()
+            } else {
+                format!("{:.decimals$}", 0.0)
+            }
+        } else if self.scientific {
+            let exponent = exponent_of(value);
+            format!("{:.decimals$}e{exponent}", value / 10f64.powf(exponent))
+        } else {
+            format!("{value:.decimals$}")
+        }
+    }
+}
+
+impl Ranged for Axis {
+    type FormatOption = NoDefaultFormatting;
+    type ValueType = f64;
+
+    fn map(&self, value: &f64, limit: (i32, i32)) -> i32 {
+        let (start, end) = (self.range.start / 2.0, self.range.end / 2.0);
+        let fraction = (value / 2.0 - start) / (end - start);
+        limit.0 + (fraction * f64::from(limit.1 - limit.0)).round() as i32
+    }
+
+    fn key_points<Hint: KeyPointHint>(&self, hint: Hint) -> Vec<f64> {
+        if hint.weight().allow_light_points() {
+            self.minor.clone()
+        } else {
+            self.major.clone()
+        }
+    }
+
+    fn range(&self) -> std::ops::Range<f64> {
+        self.range.clone()
+    }
+}
+
+impl ValueFormatter<f64> for Axis {
+    fn format_ext(&self, value: &f64) -> String {
+        self.label(*value)
+    }
+}
+
+/// The multiples of `step` inside `range` (none for a step that is not a positive number).
+fn multiples(range: &std::ops::Range<f64>, step: f64) -> Vec<f64> {
+    if !(step > 0.0 && step.is_finite()) {
+        return Vec::new();
+    }
+    let first = (range.start / step).ceil();
+    let last = (range.end / step).floor();
+    // Multiplying each index, rather than adding steps, keeps rounding errors from piling up.
+    (0..)
+        .map(|i| (first + f64::from(i)) * step)
+        .take_while(|&v| v <= last * step)
+        .take(1000)
+        .collect()
+}
+
+/// The power of ten of `value`'s leading digit. The nudge keeps 1e5, whose logarithm may come
+/// out as 4.999..., from reading 10.0e4.
+fn exponent_of(value: f64) -> f64 {
+    (value.abs().log10() + 1e-9).floor()
+}
+
+/// The fewest decimals that write `x` (a tick step, 1, 2 or 5 times a power of ten) exactly.
+fn decimals_needed(x: f64) -> usize {
+    (0..15)
+        .find(|&d| {
+            let shifted = x * 10f64.powi(d as i32);
+            (shifted - shifted.round()).abs() <= 1e-6 * shifted.abs().max(1.0)
+        })
+        .unwrap_or(15)
+}
+
+/// The corner of the plotting area (45 % of its width by 40 % of its height) that holds the
+/// fewest points, where the legend hides the least of the curves.
 fn emptiest_corner(
     series: &[Vec<(f64, f64)>],
     x: &std::ops::Range<f64>,
@@ -331,20 +511,440 @@ fn emptiest_corner(
     .map_or(SeriesLabelPosition::UpperRight, |(corner, _)| corner)
 }
 
+/// Averages each `factor` x `factor` block of the RGB picture `fine`, `fine_width` pixels wide.
+fn downsample(fine: &[u8], fine_width: usize, factor: usize) -> Vec<u8> {
+    let width = fine_width / factor;
+    let height = fine.len() / (3 * fine_width * factor);
+    let mut rgb = Vec::with_capacity(3 * width * height);
+    for row in 0..height {
+        for column in 0..width {
+            for channel in 0..3 {
+                let sum: usize = (0..factor)
+                    .flat_map(|dy| (0..factor).map(move |dx| (dy, dx)))
+                    .map(|(dy, dx)| {
+                        let (y, x) = (row * factor + dy, column * factor + dx);
+                        usize::from(fine[3 * (y * fine_width + x) + channel])
+                    })
+                    .sum();
+                rgb.push(((sum + factor * factor / 2) / (factor * factor)) as u8);
+            }
+        }
+    }
+    rgb
+}
+
+/// Encodes in memory, then writes the file in one go, so that a failure is about the file.
 fn encode_png(path: &Path, rgb: &[u8], width: u32, height: u32) -> Result<(), PlotError> {
-    let io_error = |source| PlotError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
     let encode_error = |source| PlotError::Encode {
         path: path.to_path_buf(),
         source,
     };
-    let file = File::create(path).map_err(io_error)?;
-    let mut encoder = png::Encoder::new(BufWriter::new(file), width, height);
+    let mut bytes = Vec::new();
+    let mut encoder = png::Encoder::new(&mut bytes, width, height);
     encoder.set_color(png::ColorType::Rgb);
     encoder.set_depth(png::BitDepth::Eight);
     let mut writer = encoder.write_header().map_err(encode_error)?;
     writer.write_image_data(rgb).map_err(encode_error)?;
-    writer.finish().map_err(encode_error)
+    writer.finish().map_err(encode_error)?;
+    std::fs::write(path, bytes).map_err(|source| PlotError::Io {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+/// The drawing backend that draws text with the embedded font.
+mod backend {
+    use ab_glyph::{point, Font, FontRef, OutlinedGlyph, ScaleFont};
+    use plotters::prelude::{BitMapBackend, DrawingBackend};
+    use plotters::style::text_anchor::{HPos, VPos};
+    use plotters_backend::{BackendColor, BackendStyle, BackendTextStyle, DrawingErrorKind};
+
+    /// plotters' bitmap backend with text drawn here: plotters 0.3.7 places each glyph without
+    /// its side bearing, which crowds some letters and spreads others ("dis placement", "0 .0").
+    pub(super) struct PlotBackend<'a> {
+        pub(super) bitmap: BitMapBackend<'a>,
+        pub(super) font: FontRef<'static>,
+    }
+
+    type BackendResult =
+        Result<(), DrawingErrorKind<<BitMapBackend<'static> as DrawingBackend>::ErrorType>>;
+
+    /// One glyph of a laid-out line: its outline and where its pixels go, relative to the top
+    /// left of the line's box.
+    struct PlacedGlyph {
+        outline: OutlinedGlyph,
+        left: i32,
+        top: i32,
+    }
+
+    impl PlotBackend<'_> {
+        /// Lays `text` out on one line at `size` pixels (ascent to descent, as plotters measures
+        /// its fonts), with kerning; returns the glyphs and the line's width and height.
+        fn layout(&self, text: &str, size: f64) -> (Vec<PlacedGlyph>, u32, u32) {
+            let font = self.font.as_scaled(size as f32);
+            let mut caret = 0.0f32;
+            let mut previous = None;
+            let mut glyphs = Vec::new();
+            for c in text.chars() {
+                let id = font.glyph_id(c);
+                if let Some(previous) = previous {
+                    caret += font.kern(previous, id);
+                }
+                previous = Some(id);
+                let glyph = id.with_scale_and_position(font.scale(), point(caret, font.ascent()));
+                caret += font.h_advance(id);
+                if let Some(outline) = font.outline_glyph(glyph) {
+                    let bounds = outline.px_bounds();
+                    glyphs.push(PlacedGlyph {
+                        left: bounds.min.x as i32,
+                        top: bounds.min.y as i32,
+                        outline,
+                    });
+                }
+            }
+            let height = font.ascent() - font.descent();
+            (glyphs, caret.ceil() as u32, height.ceil() as u32)
+        }
+    }
+
+    /// Shapes go to the bitmap backend's own routines, which are faster than the trait's
+    /// pixel-by-pixel defaults; text is laid out and drawn with the embedded font.
+    impl DrawingBackend for PlotBackend<'_> {
+        type ErrorType = <BitMapBackend<'static> as DrawingBackend>::ErrorType;
+
+        fn get_size(&self) -> (u32, u32) {
+            self.bitmap.get_size()
+        }
+
+        fn ensure_prepared(&mut self) -> BackendResult {
+            self.bitmap.ensure_prepared()
+        }
+
+        fn present(&mut self) -> BackendResult {
+            self.bitmap.present()
+        }
+
+        fn draw_pixel(&mut self, point: (i32, i32), color: BackendColor) -> BackendResult {
+            self.bitmap.draw_pixel(point, color)
+        }
+
+        fn draw_line<S: BackendStyle>(
+            &mut self,
+            from: (i32, i32),
+            to: (i32, i32),
+            style: &S,
+        ) -> BackendResult {
+            self.bitmap.draw_line(from, to, style)
+        }
+
+        fn draw_rect<S: BackendStyle>(
+            &mut self,
+            upper_left: (i32, i32),
+            bottom_right: (i32, i32),
+            style: &S,
+            fill: bool,
+        ) -> BackendResult {
+            self.bitmap.draw_rect(upper_left, bottom_right, style, fill)
+        }
+
+        fn draw_path<S: BackendStyle, I: IntoIterator<Item = (i32, i32)>>(
+            &mut self,
+            path: I,
+            style: &S,
+        ) -> BackendResult {
+            self.bitmap.draw_path(path, style)
+        }
+
+        fn draw_circle<S: BackendStyle>(
+            &mut self,
+            center: (i32, i32),
+            radius: u32,
+            style: &S,
+            fill: bool,
+        ) -> BackendResult {
+            self.bitmap.draw_circle(center, radius, style, fill)
+        }
+
+        fn fill_polygon<S: BackendStyle, I: IntoIterator<Item = (i32, i32)>>(
+            &mut self,
+            vert: I,
+            style: &S,
+        ) -> BackendResult {
+            self.bitmap.fill_polygon(vert, style)
+        }
+
+        fn draw_text<S: BackendTextStyle>(
+            &mut self,
+            text: &str,
+            style: &S,
+            pos: (i32, i32),
+        ) -> BackendResult {
+            let color = style.color();
+            let (glyphs, width, height) = self.layout(text, style.size());
+            let (width, height) = (width as i32, height as i32);
+            let anchor = style.anchor();
+            let dx = match anchor.h_pos {
+                HPos::Left => 0,
+                HPos::Center => -width / 2,
+                HPos::Right => -width,
+            };
+            let dy = match anchor.v_pos {
+                VPos::Top => 0,
+                VPos::Center => -height / 2,
+                VPos::Bottom => -height,
+            };
+            let turn = style.transform();
+            let mut result = Ok(());
+            for glyph in &glyphs {
+                glyph.outline.draw(|x, y, coverage| {
+                    let (x, y) =
+                        turn.transform(glyph.left + x as i32 + dx, glyph.top + y as i32 + dy);
+                    let shade = BackendColor {
+                        alpha: color.alpha * f64::from(coverage.min(1.0)),
+                        rgb: color.rgb,
+                    };
+                    if result.is_ok() {
+                        result = self.bitmap.draw_pixel((pos.0 + x, pos.1 + y), shade);
+                    }
+                });
+            }
+            result
+        }
+
+        fn estimate_text_size<S: BackendTextStyle>(
+            &self,
+            text: &str,
+            style: &S,
+        ) -> Result<(u32, u32), DrawingErrorKind<Self::ErrorType>> {
+            let (_, width, height) = self.layout(text, style.size());
+            Ok((width, height))
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A fresh folder under the system temp dir, unique to this test and process.
+    fn temp_folder(test: &str) -> PathBuf {
+        let dir =
+            std::env::temp_dir().join(format!("thermostamp-plot-{}-{test}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    fn plot_of(series: Vec<Series>) -> LinePlot {
+        LinePlot {
+            title: "Bias extension, T300/PPS at 300 °C".to_string(),
+            x_label: "displacement u (mm)".to_string(),
+            y_label: "force F (N)".to_string(),
+            series,
+        }
+    }
+
+    fn two_series() -> LinePlot {
+        let u: Vec<f64> = (0..=200).map(|i| f64::from(i) * 0.25).collect();
+        let model = u.iter().map(|&u| (u, 0.02 * u * u + 0.5 * u)).collect();
+        let measured = u
+            .iter()
+            .step_by(10)
+            .map(|&u| (u, 0.021 * u * u + 0.4 * u + 1.0))
+            .collect();
+        plot_of(vec![
+            Series::new("model", model, LineStyle::Solid),
+            Series::new("measured", measured, LineStyle::Markers),
+        ])
+    }
+
+    /// `(width, height)` from the IHDR chunk, after checking the PNG signature.
+    fn png_size(bytes: &[u8]) -> (u32, u32) {
+        assert!(bytes.len() > 24, "only {} bytes", bytes.len());
+        assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n", "not a PNG");
+        assert_eq!(&bytes[12..16], b"IHDR");
+        let word = |at: usize| u32::from_be_bytes(bytes[at..at + 4].try_into().unwrap());
+        (word(16), word(20))
+    }
+
+    /// Decoded RGB pixels of the PNG at `path`.
+    fn decode(path: &Path) -> (png::OutputInfo, Vec<u8>) {
+        let file = std::io::BufReader::new(std::fs::File::open(path).unwrap());
+        let mut reader = png::Decoder::new(file).read_info().unwrap();
+        let mut pixels = vec![0; reader.output_buffer_size().unwrap()];
+        let info = reader.next_frame(&mut pixels).unwrap();
+        pixels.truncate(info.buffer_size());
+        (info, pixels)
+    }
+
+    #[test]
+    fn writes_a_png_of_the_requested_size_with_curves_and_text() {
+        let path = temp_folder("two-series").join("force.png");
+        write_png(&path, &two_series(), 900, 600).unwrap();
+        let bytes = std::fs::read(&path).unwrap();
+        assert_eq!(png_size(&bytes), (900, 600));
+        let (info, pixels) = decode(&path);
+        assert_eq!((info.width, info.height), (900, 600));
+        assert_eq!(info.color_type, png::ColorType::Rgb);
+        let rgb: Vec<[u8; 3]> = pixels.chunks_exact(3).map(|p| [p[0], p[1], p[2]]).collect();
+        let count = |c: [u8; 3]| rgb.iter().filter(|&&p| p == c).count();
+        let white = count([255, 255, 255]);
+        assert!(white > rgb.len() / 2, "mostly white background: {white}");
+        assert!(white < rgb.len() * 98 / 100, "something is drawn: {white}");
+        // Each series in its own palette colour, and black for text and axes.
+        let blue = PALETTE[0];
+        let orange = PALETTE[1];
+        assert!(count([blue.0, blue.1, blue.2]) > 500, "first series drawn");
+        assert!(
+            count([orange.0, orange.1, orange.2]) > 200,
+            "second series drawn"
+        );
+        assert!(count([0, 0, 0]) > 500, "axes and text drawn");
+    }
+
+    #[test]
+    fn text_is_drawn_with_the_embedded_font() {
+        let dir = temp_folder("text");
+        let mut plot = plot_of(vec![Series::new(
+            "one",
+            vec![(0.0, 0.0), (1.0, 1.0)],
+            LineStyle::Solid,
+        )]);
+        plot.title = String::new();
+        let untitled = dir.join("untitled.png");
+        write_png(&untitled, &plot, 400, 300).unwrap();
+        plot.title = "A title that must show up as dark pixels".to_string();
+        let titled = dir.join("titled.png");
+        write_png(&titled, &plot, 400, 300).unwrap();
+        // Inked pixels in the band above the plotting area, where only the title goes.
+        let ink = |path: &Path| {
+            let (_, pixels) = decode(path);
+            pixels[..3 * 400 * 20]
+                .chunks_exact(3)
+                .filter(|p| p.iter().all(|&c| c < 128))
+                .count()
+        };
+        assert_eq!(ink(&untitled), 0);
+        assert!(ink(&titled) > 150, "the title is drawn: {}", ink(&titled));
+    }
+
+    /// Pixels of exactly the first palette colour: the first series, once drawn.
+    fn first_series_pixels(path: &Path) -> usize {
+        let (_, pixels) = decode(path);
+        let blue = PALETTE[0];
+        pixels
+            .chunks_exact(3)
+            .filter(|p| p == &[blue.0, blue.1, blue.2])
+            .count()
+    }
+
+    #[test]
+    fn degenerate_data_still_plots() {
+        let dir = temp_folder("degenerate");
+        let cases = [
+            ("single", vec![(2.0, 3.0)]),
+            ("constant", vec![(0.0, 5.0), (1.0, 5.0), (2.0, 5.0)]),
+            ("zero", vec![(0.0, 0.0), (0.0, 0.0)]),
+            ("tiny", vec![(0.0, 1e-9), (1e-6, 3e-9)]),
+            ("subnormal", vec![(0.0, 5e-324)]),
+            ("huge", vec![(-1e300, -1e300), (1e300, 1e300)]),
+        ];
+        for (name, points) in cases {
+            let path = dir.join(format!("{name}.png"));
+            let plot = plot_of(vec![Series::new(name, points, LineStyle::Dashed)]);
+            write_png(&path, &plot, 300, 200).unwrap_or_else(|e| panic!("{name}: {e}"));
+            assert_eq!(png_size(&std::fs::read(&path).unwrap()), (300, 200));
+            assert!(first_series_pixels(&path) > 0, "{name}: the data shows");
+        }
+    }
+
+    #[test]
+    fn empty_and_non_finite_series_beside_a_good_one_are_skipped() {
+        let path = temp_folder("partial").join("partial.png");
+        let plot = plot_of(vec![
+            Series::new(
+                "good",
+                vec![(0.0, 1.0), (1.0, f64::NAN), (2.0, 3.0)],
+                LineStyle::Solid,
+            ),
+            Series::new("empty", vec![], LineStyle::Solid),
+            Series::new("nan", vec![(f64::NAN, 1.0)], LineStyle::Markers),
+        ]);
+        write_png(&path, &plot, 900, 600).unwrap();
+        assert!(first_series_pixels(&path) > 500);
+    }
+
+    #[test]
+    fn padded_range_widens_the_data() {
+        let r = padded_range([10.0, 0.0, 2.0].into_iter());
+        assert!(
+            (r.start + 0.4).abs() < 1e-12 && (r.end - 10.4).abs() < 1e-12,
+            "{r:?}"
+        );
+        assert_eq!(padded_range([5.0].into_iter()), 4.75..5.25);
+        assert_eq!(padded_range([0.0].into_iter()), -1.0..1.0);
+        let r = padded_range([-f64::MAX, f64::MAX].into_iter());
+        assert!(r.start.is_finite() && r.end.is_finite() && r.start < r.end);
+    }
+
+    #[test]
+    fn tick_labels_carry_the_decimals_their_step_needs() {
+        let labels = |range, target| {
+            let axis = Axis::new(range, target);
+            let labels: Vec<String> = axis.major.iter().map(|v| axis.format_ext(v)).collect();
+            labels.join(" ")
+        };
+        assert_eq!(labels(-0.2..52.0, 8.0), "0 5 10 15 20 25 30 35 40 45 50");
+        assert_eq!(labels(0.0..2.0, 4.0), "0.0 0.5 1.0 1.5 2.0");
+        assert_eq!(
+            labels(-4.1e-6..4.3e-6, 8.0),
+            "-4e-6 -3e-6 -2e-6 -1e-6 0 1e-6 2e-6 3e-6 4e-6"
+        );
+        assert_eq!(labels(0.9e5..3.1e5, 4.0), "1.0e5 1.5e5 2.0e5 2.5e5 3.0e5");
+        assert_eq!(labels(0.0..1e6, 2.0), "0 5.0e5 1.0e6");
+    }
+
+    #[test]
+    fn a_plot_without_points_is_an_error_naming_it() {
+        let path = temp_folder("empty").join("empty.png");
+        let plot = plot_of(vec![Series::new("none", vec![], LineStyle::Solid)]);
+        let e = write_png(&path, &plot, 900, 600).unwrap_err();
+        assert!(matches!(e, PlotError::Empty { .. }), "{e:?}");
+        assert!(e.to_string().contains(&plot.title), "{e}");
+        let e = write_png(&path, &plot_of(vec![]), 900, 600).unwrap_err();
+        assert!(matches!(e, PlotError::Empty { .. }), "{e:?}");
+        assert!(!path.exists());
+    }
+
+    #[test]
+    fn a_plot_with_only_non_finite_points_is_an_error() {
+        let path = temp_folder("nan").join("nan.png");
+        let plot = plot_of(vec![
+            Series::new("nan", vec![(f64::NAN, f64::NAN); 3], LineStyle::Solid),
+            Series::new("inf", vec![(1.0, f64::INFINITY)], LineStyle::Markers),
+        ]);
+        let e = write_png(&path, &plot, 900, 600).unwrap_err();
+        assert!(
+            matches!(e, PlotError::NoFinitePoints { count: 4, .. }),
+            "{e:?}"
+        );
+        assert!(e.to_string().contains(&plot.title), "{e}");
+        assert!(!path.exists());
+    }
+
+    #[test]
+    fn unusable_sizes_are_errors() {
+        let path = temp_folder("size").join("size.png");
+        for (w, h) in [(0, 600), (900, 0), (100, 600), (900, MAX_SIDE + 1)] {
+            let e = write_png(&path, &two_series(), w, h).unwrap_err();
+            assert!(matches!(e, PlotError::Size { .. }), "{w} x {h}: {e:?}");
+        }
+    }
+
+    #[test]
+    fn io_errors_name_the_path() {
+        let path = temp_folder("io").join("no-such-folder").join("plot.png");
+        let e = write_png(&path, &two_series(), 900, 600).unwrap_err();
+        assert!(matches!(e, PlotError::Io { .. }), "{e:?}");
+        assert!(e.to_string().contains(&path.display().to_string()), "{e}");
+    }
 }

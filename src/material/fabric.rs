@@ -225,14 +225,14 @@ impl MaterialLaw for WovenFabric {
             + (dyad(a0, b0) + dyad(b0, a0)) * w8)
     }
 
-    /// The stiffer yarn family, plus the shear stiffness `4 (|W_s'| + |W_s''|)` (a bound on the
-    /// second derivative of `W_s(sin^2 gamma)` in gamma).
+    /// Both yarn families plus the shear stiffness `4 (|W_s'| + |W_s''|)` (a bound on the second
+    /// derivative of `W_s(sin^2 gamma)` in gamma). The yarn moduli add rather than take the
+    /// larger: both families load the same nodes of a triangle, and with the larger alone the
+    /// step exceeds the critical step of skewed triangles (checked against element eigenvalues
+    /// in `tests/solver_patch.rs`) and a bias-extension run of stiff yarns blows up.
     fn wave_modulus(&self, point: &PointKinematics) -> Result<f64, MaterialError> {
         let inv = FibreInvariants::of(&point.c, &point.fibres)?;
-        let yarns = self
-            .warp
-            .wave_modulus(inv.i4.sqrt())
-            .max(self.weft.wave_modulus(inv.i6.sqrt()));
+        let yarns = self.warp.wave_modulus(inv.i4.sqrt()) + self.weft.wave_modulus(inv.i6.sqrt());
         let i10 = inv.i10();
         Ok(yarns
             + 4.0 * (self.shear.derivative(i10).abs() + self.shear.second_derivative(i10).abs()))

@@ -51,6 +51,15 @@ impl ViscoHyperelasticMatrix {
         Self { c10, d1, eta1 }
     }
 
+    /// The temperatures over which all three tables are defined.
+    pub fn parameters_range(&self) -> (f64, f64) {
+        let ranges = [self.c10.range(), self.d1.range(), self.eta1.range()];
+        (
+            ranges.iter().map(|r| r.0).fold(f64::NEG_INFINITY, f64::max),
+            ranges.iter().map(|r| r.1).fold(f64::INFINITY, f64::min),
+        )
+    }
+
     /// `C10`, `D1` and `eta1` interpolated at `temperature`.
     pub fn parameters_at(&self, temperature: f64) -> Result<MatrixParameters, MaterialError> {
         Ok(MatrixParameters {

@@ -11,6 +11,8 @@ pub struct Energies {
     pub elastic: f64,
     /// Work of the reaction forces at the constrained nodes: what the machine put in.
     pub external_work: f64,
+    /// Energy removed by the global mass-proportional damping.
+    pub damping: f64,
 }
 
 impl Energies {
@@ -19,9 +21,9 @@ impl Energies {
         self.internal_work - self.elastic
     }
 
-    /// `W_ext - W_int - E_kin`: zero for an exact integration.
+    /// `W_ext - W_int - E_kin - W_damp`: zero for an exact integration.
     pub fn balance(&self) -> f64 {
-        self.external_work - self.internal_work - self.kinetic
+        self.external_work - self.internal_work - self.kinetic - self.damping
     }
 
     /// The balance relative to the external work (0 when nothing was put in yet).

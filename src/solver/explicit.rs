@@ -25,6 +25,10 @@ pub struct SolverSettings {
     pub target_time_step: Option<f64>,
     /// Simulated time between two calls of [`Observer::record`] (s).
     pub output_interval: f64,
+    /// Global mass-proportional damping `c` (1/s): a force `-c m v` on every free node. It
+    /// damps the slow ringing of soft, mass-scaled sheets in quasi-static runs; what it removes
+    /// is booked in [`Energies::damping`]. Zero: none.
+    pub damping: f64,
 }
 
 /// The integrated state at one instant.
@@ -178,7 +182,13 @@ pub fn run(
             return Ok(state);
         }
         let dt = (settings.time_step_safety * stable_step).min(settings.end_time - state.time);
-        advance(model, &prescribed, &mut state, dt, &mut previous);
+        advance(
+            model,
+            &prescribed,
+            &mut state,
+            (dt, settings.damping),
+            &mut previous,
+        );
         if let Some(node) = state
             .positions
             .iter()
@@ -191,6 +201,15 @@ pub fn run(
                 format!("node {node} has a non-finite position"),
             ));
         }
+        if energy_runs_away(&state.energies) {
+            let element = fastest_element(model, &state);
+            let reason = format!(
+                "energy is being created: W_ext - W_int - E_kin - W_damp = {:.4e} N·mm (this \
+                 element holds the fastest node; the time step may be too large for the material)",
+                state.energies.balance()
+            );
+            return Err(unstable(&state, element, reason));
+        }
         state.time_step = dt;
         state.time = if dt == settings.end_time - state.time {
             settings.end_time
@@ -198,7 +217,7 @@ pub fn run(
             state.time + dt
         };
         state.step += 1;
-        if state.step % 200 == 0 {
+        if state.step.is_multiple_of(200) {
             observer.progress(&state);
         }
     }
@@ -210,18 +229,20 @@ fn advance(
     model: &Model,
     prescribed: &[Option<&Motion>],
     state: &mut State,
-    dt: f64,
+    (dt, damping): (f64, f64),
     previous: &mut PreviousStep,
 ) {
     let dt_mean = 0.5 * (previous.time_step + dt);
     let t_half = state.time + 0.5 * dt;
-    let (mut kinetic, mut internal, mut external) = (0.0, 0.0, 0.0);
+    let (mut kinetic, mut internal, mut external, mut damping_work) = (0.0, 0.0, 0.0, 0.0);
+    // m (v_new - v_old)/dt + c m (v_new + v_old)/2 + f = 0, solved for v_new
+    let half_damp = 0.5 * damping * dt_mean;
     for (a, motion) in prescribed.iter().enumerate() {
         let m = state.masses[a];
         let f = state.internal_forces[a];
         let v_old = state.velocities[a];
         let v_new = match motion {
-            None => v_old - f * (dt_mean / m),
+            None => (v_old * (1.0 - half_damp) - f * (dt_mean / m)) / (1.0 + half_damp),
             Some(Motion::Fixed) => Vector3::zeros(),
             Some(Motion::Velocity(field)) => field(t_half, &model.mesh.nodes[a]),
         };
@@ -229,7 +250,11 @@ fn advance(
             None => Vector3::zeros(),
             Some(_) => f + (v_new - v_old) * (m / dt_mean),
         };
-        kinetic += 0.5 * m * (0.5 * (v_old + v_new)).norm_squared();
+        let v_mid = 0.5 * (v_old + v_new);
+        kinetic += 0.5 * m * v_mid.norm_squared();
+        if motion.is_none() {
+            damping_work += damping * m * v_mid.norm_squared() * dt_mean;
+        }
         internal += 0.5 * (previous.forces[a] + f).dot(&previous.increments[a]);
         external += 0.5 * (previous.reactions[a] + reaction).dot(&previous.increments[a]);
         let increment = v_new * dt;
@@ -244,6 +269,7 @@ fn advance(
     state.energies.kinetic = kinetic;
     state.energies.internal_work += internal;
     state.energies.external_work += external;
+    state.energies.damping += damping_work;
 }
 
 /// `f_int` at each node: the sum of its elements' contributions, gathered node by node so
@@ -277,6 +303,32 @@ fn elastic_energy(model: &Model, state: &State) -> Result<f64, (usize, MaterialE
         .try_reduce(|| 0.0, |a, b| Ok(a + b))
 }
 
+/// An explicit run that goes unstable creates energy from nothing: the balance error grows
+/// past the energy the machine put in. A stable run stays within a few per cent of it.
+fn energy_runs_away(e: &Energies) -> bool {
+    let scale = e.external_work.abs().max(e.internal_work.abs());
+    scale > 0.0 && e.balance().abs() > RUNAWAY_BALANCE * scale + 1e-12
+}
+
+/// Energy balance error (fraction of the work put in) taken as a blow-up.
+const RUNAWAY_BALANCE: f64 = 0.5;
+
+/// The element around the node that moves fastest: where a blow-up starts.
+fn fastest_element(model: &Model, state: &State) -> usize {
+    let node = (0..state.velocities.len())
+        .max_by(|&a, &b| {
+            state.velocities[a]
+                .norm()
+                .total_cmp(&state.velocities[b].norm())
+        })
+        .unwrap_or(0);
+    model
+        .elements
+        .iter()
+        .position(|e| e.nodes.contains(&node))
+        .unwrap_or(0)
+}
+
 fn check_settings(s: &SolverSettings) -> Result<(), SolverError> {
     let positive = |name: &str, v: f64| {
         if v.is_finite() && v > 0.0 {
@@ -296,6 +348,12 @@ fn check_settings(s: &SolverSettings) -> Result<(), SolverError> {
     }
     if let Some(target) = s.target_time_step {
         positive("target time step", target)?;
+    }
+    if !(s.damping.is_finite() && s.damping >= 0.0) {
+        return Err(SolverError::Settings(format!(
+            "damping = {} must be >= 0",
+            s.damping
+        )));
     }
     Ok(())
 }
