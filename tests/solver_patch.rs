@@ -50,6 +50,7 @@ fn homogeneous_run(g: Matrix3<f64>, end_time: f64, angle: f64) -> (Model, State)
         target_time_step: None,
         output_interval: end_time,
         damping: 0.0,
+        yarn_damping: 0.0,
     };
     let mut last = Last(None);
     solver::run(&model, &settings, &mut last).unwrap();
@@ -144,6 +145,7 @@ fn spurious_strain_after_rotation(axis: Vector3<f64>, safety: f64) -> f64 {
         target_time_step: None,
         output_interval: 1e-4,
         damping: 0.0,
+        yarn_damping: 0.0,
     };
     let mut last = Last(None);
     solver::run(&model, &settings, &mut last).unwrap();

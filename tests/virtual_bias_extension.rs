@@ -1,11 +1,15 @@
-//! The virtual bias-extension test against physics (MODEL.md §5): three kinematic zones,
-//! energy balance, quasi-static kinetic energy, and the normalised shear force recovered from
-//! the simulated force curve equal to the fabric's own shear law.
+//! The virtual bias-extension test against physics (MODEL.md §5): the central-zone shear angle
+//! and the clamp force of the equilibrium of an inextensible net (`experiment::ideal_net`),
+//! three kinematic zones, energy balance, quasi-static kinetic energy, the normalised shear
+//! force recovered from the simulated force curve equal to the fabric's own shear law, and
+//! convergence of the force under mesh refinement.
 
 mod common;
 
 use common::repo_path;
 use thermostamp::experiment::bias_extension::{BiasExtension, BiasExtensionRun};
+use thermostamp::experiment::ideal_net::{fabric_trellis_energy, IdealNetBias};
+use thermostamp::experiment::kinematics::bias_extension_displacement;
 use thermostamp::experiment::sheet_test::mean_shear_angle;
 use thermostamp::material::MaterialCard;
 use thermostamp::solver::Model;
@@ -14,16 +18,33 @@ fn stiff_yarn_fabric() -> MaterialCard {
     MaterialCard::load(&repo_path("tests/data/stiff-yarn-fabric.toml")).unwrap()
 }
 
-/// A coarse, fast specimen: 25 mm crossed cells, crosshead at 100 mm/s, physical mass.
+/// A coarse, fast specimen: 25 mm crossed cells, crosshead at 100 mm/s, physical mass, pulled
+/// until the pin-jointed central zone passes 40°.
 fn coarse_test() -> BiasExtension {
     let mut test = BiasExtension::benchmark(20.0);
     test.element_size = 25.0;
     test.speed = 100.0;
     test.time_scaling = 1.0;
     test.target_time_step = None;
-    test.end_displacement = 75.0;
+    test.end_displacement = bias_extension_displacement(150.0, 450.0, 40.5f64.to_radians());
     test.history_points = 60;
     test
+}
+
+/// Mean of the ideal net's shear angle (degrees) over `elements`, area-weighted, sampled at
+/// three interior points of each triangle (the net's field is not constant in an element).
+fn net_mean_over(model: &Model, elements: &[usize], angle: impl Fn(f64, f64) -> f64) -> f64 {
+    let (mut sum, mut area) = (0.0, 0.0);
+    for &k in elements {
+        let p = model.mesh.triangles[k].map(|n| model.mesh.nodes[n]);
+        let a = 0.5 * (p[1] - p[0]).cross(&(p[2] - p[0])).norm();
+        for w in [[4.0, 1.0, 1.0], [1.0, 4.0, 1.0], [1.0, 1.0, 4.0]] {
+            let q = (p[0] * w[0] + p[1] * w[1] + p[2] * w[2]) / 6.0;
+            sum += a * angle(q.x, q.y) / 3.0;
+        }
+        area += a;
+    }
+    (sum / area).to_degrees()
 }
 
 fn run(test: &BiasExtension, card: &MaterialCard) -> (Model, BiasExtensionRun) {
@@ -74,9 +95,55 @@ fn zones_of_the_pin_jointed_net() {
 }
 
 #[test]
-fn three_zones_energy_balance_and_normalised_shear_force() {
+fn central_zone_and_force_follow_the_equilibrium_of_the_inextensible_net() {
     let card = stiff_yarn_fabric();
     let test = coarse_test();
+    let (model, result) = run(&test, &card);
+    let t_b = card.laminate.layers()[0].thickness;
+    let law = fabric_trellis_energy(&card.fabric.shear, t_b);
+    let net = IdealNetBias {
+        width: test.width,
+        length: test.length,
+        cells: 60,
+    };
+    let zone = test.central_zone(&model);
+    let rows: Vec<_> = result
+        .rows
+        .iter()
+        .filter(|r| r.displacement > 5.0)
+        .collect();
+    let d: Vec<f64> = rows.iter().map(|r| r.displacement).collect();
+    let equilibria = net.solve(&law, &d).unwrap();
+    assert!(rows.last().unwrap().shear_angle_pin_jointed > 40.0);
+    for (row, eq) in rows.iter().zip(&equilibria) {
+        let expected = net_mean_over(&model, &zone, |x, y| eq.shear_angle(x, y));
+        assert!(
+            (row.shear_angle - expected).abs() < 1.0,
+            "d = {:.1} mm: central zone {:.2}° vs net equilibrium {expected:.2}° (pin-jointed {:.2}°)",
+            row.displacement,
+            row.shear_angle,
+            row.shear_angle_pin_jointed
+        );
+        // the net is inextensible, the test fabric nearly so: its force is an upper bound
+        let ratio = row.force / eq.force;
+        assert!(
+            (0.95..1.01).contains(&ratio),
+            "d = {:.1} mm: force {:.4} N vs net equilibrium {:.4} N",
+            row.displacement,
+            row.force,
+            eq.force
+        );
+    }
+    // the rising shear force of the fabric makes the centre lag the pin-jointed formula
+    let last = rows.last().unwrap();
+    assert!(last.shear_angle < last.shear_angle_pin_jointed - 2.0);
+}
+
+#[test]
+fn three_zones_energy_balance_and_normalised_shear_force() {
+    let card = stiff_yarn_fabric();
+    let mut test = coarse_test();
+    test.end_displacement = 75.0;
     let (model, result) = run(&test, &card);
     let state = result.run.outcome.as_ref().expect("the run finishes");
     let s = &result.run.summary;
@@ -128,4 +195,47 @@ fn three_zones_energy_balance_and_normalised_shear_force() {
             row.shear_angle_pin_jointed
         );
     }
+}
+
+/// Clamp force at d = 30 mm on 4, 8 and 16 crossed cells across the width.
+#[test]
+fn force_converges_under_mesh_refinement() {
+    let card = stiff_yarn_fabric();
+    let forces: Vec<f64> = [37.5, 18.75, 9.375]
+        .iter()
+        .map(|&size| {
+            let mut test = coarse_test();
+            test.element_size = size;
+            test.end_displacement = 30.0;
+            test.history_points = 6;
+            let result = test.run(&card.laminate, card.density, None, None).unwrap();
+            assert!(
+                result.run.outcome.is_ok(),
+                "{size} mm: {:?}",
+                result.run.outcome.err()
+            );
+            let last = result.rows.last().unwrap();
+            assert!((last.displacement - 30.0).abs() < 1e-9);
+            last.force
+        })
+        .collect();
+    let change = |a: f64, b: f64| (a - b).abs() / b;
+    let (coarse, finest) = (change(forces[0], forces[1]), change(forces[1], forces[2]));
+    assert!(finest < 0.05, "forces {forces:?}");
+    assert!(finest < coarse, "not converging: {forces:?}");
+    let t_b = card.laminate.layers()[0].thickness;
+    let net = IdealNetBias {
+        width: 150.0,
+        length: 450.0,
+        cells: 60,
+    };
+    let eq = &net
+        .solve(&fabric_trellis_energy(&card.fabric.shear, t_b), &[30.0])
+        .unwrap()[0];
+    assert!(
+        change(forces[2], eq.force) < 0.02,
+        "finest {} N vs net equilibrium {} N",
+        forces[2],
+        eq.force
+    );
 }

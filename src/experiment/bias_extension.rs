@@ -36,6 +36,8 @@ pub struct BiasExtension {
     pub target_time_step: Option<f64>,
     /// Global mass-proportional damping (1/s), see [`SolverSettings::damping`].
     pub damping: f64,
+    /// Yarn-rate damping, fraction of critical, see [`SolverSettings::yarn_damping`].
+    pub yarn_damping: f64,
     /// Number of history records.
     pub history_points: usize,
 }
@@ -61,20 +63,27 @@ pub struct BiasExtensionRun {
 }
 
 impl BiasExtension {
-    /// The benchmark specimen of Cao et al. 2008: 150 x 450 mm, ±45°, pulled 60 mm at 20 mm/min.
+    /// The benchmark specimen of Cao et al. 2008: 150 x 450 mm, ±45°, pulled 60 mm at
+    /// 20 mm/min. Run 300 times faster (eta1 divided by 300, MODEL.md §6) on 15 mm cells with
+    /// physical mass: for the shipped T300/PPS card the crosshead then moves at under 1 % of
+    /// the laminate's shear wave speed, the run is quasi-static (kinetic energy below 3 % of
+    /// internal energy) and takes a few minutes on 2 cores. Mass scaling would not make it
+    /// cheaper at the same inertia (the step and the shear wave speed both go with
+    /// `sqrt(rho)`), so it is off.
     pub fn benchmark(temperature: f64) -> Self {
         Self {
             width: 150.0,
             length: 450.0,
             ply_angle: 45.0,
-            element_size: 5.0,
+            element_size: 15.0,
             pattern: DiagonalPattern::Crossed,
             temperature,
             speed: 20.0 / 60.0,
-            time_scaling: 600.0,
+            time_scaling: 300.0,
             end_displacement: 60.0,
-            target_time_step: Some(1e-5),
+            target_time_step: None,
             damping: 0.0,
+            yarn_damping: 0.06,
             history_points: 120,
         }
     }
@@ -181,6 +190,7 @@ impl BiasExtension {
             target_time_step: self.target_time_step,
             output_interval: end_time / self.history_points.max(1) as f64,
             damping: self.damping,
+            yarn_damping: self.yarn_damping,
         }
     }
 

@@ -1,6 +1,7 @@
 //! Virtual material tests: deformation histories imposed on the material models.
 
 pub mod bias_extension;
+pub mod ideal_net;
 pub mod kinematics;
 pub mod material_point;
 pub mod sheet_test;

@@ -13,12 +13,15 @@ pub struct Energies {
     pub external_work: f64,
     /// Energy removed by the global mass-proportional damping.
     pub damping: f64,
+    /// Energy taken by the yarn-rate damping (part of the internal work).
+    pub numerical_damping: f64,
 }
 
 impl Energies {
-    /// Energy dissipated by the matrix viscosity: internal work not stored elastically.
+    /// Energy dissipated by the matrix viscosity: internal work neither stored elastically nor
+    /// taken by the yarn-rate damping.
     pub fn viscous_dissipation(&self) -> f64 {
-        self.internal_work - self.elastic
+        self.internal_work - self.elastic - self.numerical_damping
     }
 
     /// `W_ext - W_int - E_kin - W_damp`: zero for an exact integration.

@@ -9,6 +9,7 @@
 
 use super::energy::Energies;
 use super::model::{Model, Motion};
+use super::yarn_damping::{step_reduction, yarn_damping_resultant};
 use crate::material::{LaminateState, MaterialError, MembraneKinematics, MembraneResponse};
 use nalgebra::{Matrix2, Vector3};
 use rayon::prelude::*;
@@ -29,6 +30,10 @@ pub struct SolverSettings {
     /// damps the slow ringing of soft, mass-scaled sheets in quasi-static runs; what it removes
     /// is booked in [`Energies::damping`]. Zero: none.
     pub damping: f64,
+    /// Linear viscosity on the yarn strain rates, as a fraction of critical damping of the
+    /// element's highest yarn mode (see [`super::yarn_damping`]); 0.06 is a good default, as
+    /// for the linear bulk viscosity of explicit codes. Zero: none.
+    pub yarn_damping: f64,
 }
 
 /// The integrated state at one instant.
@@ -94,6 +99,8 @@ pub enum SolverError {
 struct ElementResult {
     forces: [Vector3<f64>; 3],
     stable_step: f64,
+    /// Power taken by the yarn-rate damping (N·mm/s).
+    damping_power: f64,
 }
 
 /// Elements around each node, for a race-free parallel gather of nodal forces.
@@ -150,10 +157,9 @@ pub fn run(
     observer: &mut dyn Observer,
 ) -> Result<State, SolverError> {
     check_settings(settings)?;
-    let adjacency = NodeElements::new(model);
+    let mut forces = InternalForces::new(model);
     let prescribed = prescribed_motion(model);
-    let mut state = initial_state(model, settings)?;
-    let mut results = vec![ElementResult::default(); model.elements.len()];
+    let mut state = State::at_rest(model, settings)?;
     let zeros = vec![Vector3::zeros(); model.mesh.nodes.len()];
     let mut previous = PreviousStep {
         forces: zeros.clone(),
@@ -162,10 +168,10 @@ pub fn run(
         time_step: 0.0,
     };
     let mut next_output = 0.0;
+    let mut runaway_steps = 0;
     loop {
-        let stable_step = element_loop(model, &mut state, &mut results, previous.time_step)
-            .map_err(|(element, e)| unstable(&state, element, e.to_string()))?;
-        gather_forces(&adjacency, &results, &mut state.internal_forces);
+        let (stable_step, damping_power) =
+            forces.evaluate(model, &mut state, previous.time_step, settings.yarn_damping)?;
         let last = state.time >= settings.end_time;
         if last || state.time >= next_output - 1e-9 * settings.output_interval {
             state.energies.elastic = elastic_energy(model, &state)
@@ -182,6 +188,7 @@ pub fn run(
             return Ok(state);
         }
         let dt = (settings.time_step_safety * stable_step).min(settings.end_time - state.time);
+        state.energies.numerical_damping += damping_power * dt;
         advance(
             model,
             &prescribed,
@@ -194,14 +201,19 @@ pub fn run(
             .iter()
             .position(|x| !x.iter().all(|c| c.is_finite()))
         {
-            let element = adjacency.of(node).first().map_or(0, |&(e, _)| e);
+            let element = forces.adjacency.of(node).first().map_or(0, |&(e, _)| e);
             return Err(unstable(
                 &state,
                 element,
                 format!("node {node} has a non-finite position"),
             ));
         }
-        if energy_runs_away(&state.energies) {
+        runaway_steps = if energy_runs_away(&state.energies) {
+            runaway_steps + 1
+        } else {
+            0
+        };
+        if runaway_steps > RUNAWAY_STEPS {
             let element = fastest_element(model, &state);
             let reason = format!(
                 "energy is being created: W_ext - W_int - E_kin - W_damp = {:.4e} N·mm (this \
@@ -313,6 +325,11 @@ fn energy_runs_away(e: &Energies) -> bool {
 /// Energy balance error (fraction of the work put in) taken as a blow-up.
 const RUNAWAY_BALANCE: f64 = 0.5;
 
+/// Consecutive steps the balance must stay off before the run is stopped: in the first steps
+/// the energies are tiny and the half-step offset of leapfrog velocities alone (kinetic energy
+/// of the prescribed nodes at `t_0` taken from `v_{1/2}`) is of their size; a blow-up persists.
+const RUNAWAY_STEPS: usize = 100;
+
 /// The element around the node that moves fastest: where a blow-up starts.
 fn fastest_element(model: &Model, state: &State) -> usize {
     let node = (0..state.velocities.len())
@@ -349,6 +366,12 @@ fn check_settings(s: &SolverSettings) -> Result<(), SolverError> {
     if let Some(target) = s.target_time_step {
         positive("target time step", target)?;
     }
+    if !(s.yarn_damping.is_finite() && (0.0..1.0).contains(&s.yarn_damping)) {
+        return Err(SolverError::Settings(format!(
+            "yarn damping = {} must be in [0, 1)",
+            s.yarn_damping
+        )));
+    }
     if !(s.damping.is_finite() && s.damping >= 0.0) {
         return Err(SolverError::Settings(format!(
             "damping = {} must be >= 0",
@@ -381,7 +404,45 @@ fn prescribed_motion(model: &Model) -> Vec<Option<&Motion>> {
     motion
 }
 
-/// Rest state, lumped masses, and mass scaling from the stable step at rest.
+impl State {
+    /// Rest state, lumped masses, and mass scaling from the stable step at rest.
+    pub fn at_rest(model: &Model, settings: &SolverSettings) -> Result<State, SolverError> {
+        initial_state(model, settings)
+    }
+}
+
+/// The internal-force pass of every step: the element loop (in parallel) and the race-free
+/// gather of nodal forces. Public for benchmarks and tools that need forces at a given state.
+pub struct InternalForces {
+    adjacency: NodeElements,
+    results: Vec<ElementResult>,
+}
+
+impl InternalForces {
+    pub fn new(model: &Model) -> Self {
+        Self {
+            adjacency: NodeElements::new(model),
+            results: vec![ElementResult::default(); model.elements.len()],
+        }
+    }
+
+    /// Fills `state.internal_forces` and `state.membrane` at the current positions and
+    /// velocities; `dt` is the step that led here, `yarn_damping` as in [`SolverSettings`].
+    /// Returns the stable step and the power taken by the yarn-rate damping.
+    pub fn evaluate(
+        &mut self,
+        model: &Model,
+        state: &mut State,
+        dt: f64,
+        yarn_damping: f64,
+    ) -> Result<(f64, f64), SolverError> {
+        let out = element_loop(model, state, &mut self.results, (dt, yarn_damping))
+            .map_err(|(element, e)| unstable(state, element, e.to_string()))?;
+        gather_forces(&self.adjacency, &self.results, &mut state.internal_forces);
+        Ok(out)
+    }
+}
+
 fn initial_state(model: &Model, settings: &SolverSettings) -> Result<State, SolverError> {
     let n_nodes = model.mesh.nodes.len();
     let laminate = &model.laminate;
@@ -439,18 +500,20 @@ fn rest_kinematics(model: &Model, k: usize) -> MembraneKinematics {
     }
 }
 
-/// Membrane forces of every element at the current positions (in parallel), and the stable
-/// step they allow. `dt` is the duration of the step that led here (for the thickness rate).
+/// Membrane forces of every element at the current positions (in parallel), the stable step
+/// they allow and the power of the yarn-rate damping `xi`. `dt` is the duration of the step
+/// that led here (for the thickness rate).
 fn element_loop(
     model: &Model,
     state: &mut State,
     results: &mut [ElementResult],
-    dt: f64,
-) -> Result<f64, (usize, MaterialError)> {
+    (dt, xi): (f64, f64),
+) -> Result<(f64, f64), (usize, MaterialError)> {
     let positions = &state.positions;
     let velocities = &state.velocities;
     let densities = &state.densities;
     let laminate = &model.laminate;
+    let thickness = laminate.reference_thickness();
     results
         .par_iter_mut()
         .zip(state.laminate_states.par_iter_mut())
@@ -468,9 +531,16 @@ fn element_loop(
                 .wave_modulus(&kin, lam_state)
                 .map_err(|err| (k, err))?;
             *membrane = response;
-            result.forces = e.internal_forces(&f, &response.n);
-            result.stable_step = e.altitude * (densities[k] / modulus).sqrt();
-            Ok(result.stable_step)
+            let element_step = e.altitude * (densities[k] / modulus).sqrt();
+            let (n_damping, power) =
+                yarn_damping_resultant(&kin, xi, element_step, modulus, thickness);
+            result.forces = e.internal_forces(&f, &(response.n + n_damping));
+            result.stable_step = element_step * step_reduction(xi);
+            result.damping_power = power * e.area;
+            Ok((result.stable_step, result.damping_power))
         })
-        .try_reduce(|| f64::INFINITY, |a, b| Ok(a.min(b)))
+        .try_reduce(
+            || (f64::INFINITY, 0.0),
+            |a, b| Ok((a.0.min(b.0), a.1 + b.1)),
+        )
 }

@@ -4,7 +4,8 @@
 pub mod energy;
 pub mod explicit;
 pub mod model;
+pub mod yarn_damping;
 
 pub use energy::Energies;
-pub use explicit::{run, Observer, SolverError, SolverSettings, State};
+pub use explicit::{run, InternalForces, Observer, SolverError, SolverSettings, State};
 pub use model::{Constraint, Model, Motion};
