@@ -404,13 +404,6 @@ fn prescribed_motion(model: &Model) -> Vec<Option<&Motion>> {
     motion
 }
 
-impl State {
-    /// Rest state, lumped masses, and mass scaling from the stable step at rest.
-    pub fn at_rest(model: &Model, settings: &SolverSettings) -> Result<State, SolverError> {
-        initial_state(model, settings)
-    }
-}
-
 /// The internal-force pass of every step: the element loop (in parallel) and the race-free
 /// gather of nodal forces. Public for benchmarks and tools that need forces at a given state.
 pub struct InternalForces {
@@ -443,52 +436,55 @@ impl InternalForces {
     }
 }
 
-fn initial_state(model: &Model, settings: &SolverSettings) -> Result<State, SolverError> {
-    let n_nodes = model.mesh.nodes.len();
-    let laminate = &model.laminate;
-    let thickness = laminate.reference_thickness();
-    let mut densities = vec![model.density; model.elements.len()];
-    let mut added_mass = 0.0;
-    for (k, e) in model.elements.iter().enumerate() {
-        let kin = rest_kinematics(model, k);
-        let modulus = laminate
-            .wave_modulus(&kin, &laminate.initial_state())
-            .map_err(|err| SolverError::Settings(format!("element {k}: {err}")))?;
-        let step = e.altitude * (model.density / modulus).sqrt();
-        if let Some(target) = settings.target_time_step {
-            if step < target {
-                densities[k] = model.density * (target / step).powi(2);
-                added_mass += (densities[k] - model.density) * thickness * e.area;
+impl State {
+    /// Rest state, lumped masses, and mass scaling from the stable step at rest.
+    pub fn at_rest(model: &Model, settings: &SolverSettings) -> Result<State, SolverError> {
+        let n_nodes = model.mesh.nodes.len();
+        let laminate = &model.laminate;
+        let thickness = laminate.reference_thickness();
+        let mut densities = vec![model.density; model.elements.len()];
+        let mut added_mass = 0.0;
+        for (k, e) in model.elements.iter().enumerate() {
+            let kin = rest_kinematics(model, k);
+            let modulus = laminate
+                .wave_modulus(&kin, &laminate.initial_state())
+                .map_err(|err| SolverError::Settings(format!("element {k}: {err}")))?;
+            let step = e.altitude * (model.density / modulus).sqrt();
+            if let Some(target) = settings.target_time_step {
+                if step < target {
+                    densities[k] = model.density * (target / step).powi(2);
+                    added_mass += (densities[k] - model.density) * thickness * e.area;
+                }
             }
         }
-    }
-    let mut masses = vec![0.0; n_nodes];
-    for (e, rho) in model.elements.iter().zip(&densities) {
-        for &n in &e.nodes {
-            masses[n] += rho * thickness * e.area / 3.0;
+        let mut masses = vec![0.0; n_nodes];
+        for (e, rho) in model.elements.iter().zip(&densities) {
+            for &n in &e.nodes {
+                masses[n] += rho * thickness * e.area / 3.0;
+            }
         }
+        Ok(State {
+            step: 0,
+            time: 0.0,
+            positions: model.mesh.nodes.clone(),
+            velocities: vec![Vector3::zeros(); n_nodes],
+            masses,
+            internal_forces: vec![Vector3::zeros(); n_nodes],
+            reactions: vec![Vector3::zeros(); n_nodes],
+            membrane: vec![
+                MembraneResponse {
+                    n: Matrix2::zeros(),
+                    thickness
+                };
+                model.elements.len()
+            ],
+            laminate_states: vec![laminate.initial_state(); model.elements.len()],
+            densities,
+            time_step: 0.0,
+            energies: Energies::default(),
+            added_mass,
+        })
     }
-    Ok(State {
-        step: 0,
-        time: 0.0,
-        positions: model.mesh.nodes.clone(),
-        velocities: vec![Vector3::zeros(); n_nodes],
-        masses,
-        internal_forces: vec![Vector3::zeros(); n_nodes],
-        reactions: vec![Vector3::zeros(); n_nodes],
-        membrane: vec![
-            MembraneResponse {
-                n: Matrix2::zeros(),
-                thickness
-            };
-            model.elements.len()
-        ],
-        laminate_states: vec![laminate.initial_state(); model.elements.len()],
-        densities,
-        time_step: 0.0,
-        energies: Energies::default(),
-        added_mass,
-    })
 }
 
 fn rest_kinematics(model: &Model, k: usize) -> MembraneKinematics {
