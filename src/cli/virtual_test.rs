@@ -1,8 +1,12 @@
 //! `thermostamp test ...`: the virtual material tests, with CSV, ParaView and PNG output, a
 //! progress bar and a summary table.
 
-use crate::experiment::bias_extension::{BiasExtension, BiasExtensionRun};
-use crate::experiment::sheet_test::{FrameOutput, Progress, RunSummary};
+use crate::experiment::bias_extension::{BiasExtension, BiasRow};
+use crate::experiment::picture_frame::{PictureFrame, PictureFrameRow};
+use crate::experiment::sheet_test::{
+    FrameOutput, Progress, Record, RunSummary, SheetTest, TestProcess, TestRun,
+};
+use crate::experiment::uniaxial::{UniaxialRow, UniaxialTension};
 use crate::io::plot::{write_png, LinePlot, LineStyle, Series};
 use crate::io::vtk::PvdSeries;
 use crate::io::write_csv;
@@ -16,6 +20,10 @@ use std::path::{Path, PathBuf};
 pub enum TestCommand {
     /// Bias-extension test: ±45° specimen clamped at both ends and pulled (MODEL.md §5).
     BiasExtension(BiasArgs),
+    /// Uniaxial (strip) tension test: bottom edge clamped, top edge pulled, yarns at any angle.
+    Uniaxial(UniaxialArgs),
+    /// Picture-frame test: square specimen in a pin-jointed frame pulled along its diagonal.
+    PictureFrame(PictureFrameArgs),
 }
 
 /// Options every virtual test shares.
@@ -25,28 +33,28 @@ pub struct CommonArgs {
     #[arg(long)]
     card: PathBuf,
     /// Test temperature (°C); required when the card has a matrix.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     temperature: Option<f64>,
     /// Physical crosshead speed (mm/s); 0.333 mm/s is 20 mm/min.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     speed: Option<f64>,
     /// Run the process this many times faster, with eta1 divided by it (MODEL.md §6).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     time_scaling: Option<f64>,
     /// Mass scaling to this time step (s); 0 for none.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     target_step: Option<f64>,
     /// Global mass-proportional damping (1/s).
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     damping: f64,
     /// Target element size (mm).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     element_size: Option<f64>,
     /// How rectangular cells are cut into triangles.
     #[arg(long, value_enum, default_value_t = DiagonalPattern::Crossed)]
     pattern: DiagonalPattern,
     /// Crosshead travel at the end (mm).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     end_displacement: Option<f64>,
     /// Number of ParaView frames (0 for none).
     #[arg(long, default_value_t = 20)]
@@ -62,22 +70,75 @@ pub struct CommonArgs {
     threads: Option<usize>,
 }
 
+impl CommonArgs {
+    /// Overrides a test's default process with the options given.
+    fn apply(&self, p: &mut TestProcess) {
+        p.pattern = self.pattern;
+        p.damping = self.damping;
+        p.history_points = self.history_points.max(2);
+        if let Some(v) = self.speed {
+            p.speed = v;
+        }
+        if let Some(s) = self.time_scaling {
+            p.time_scaling = s;
+        }
+        if let Some(h) = self.element_size {
+            p.element_size = h;
+        }
+        if let Some(d) = self.end_displacement {
+            p.end_displacement = d;
+        }
+        if let Some(dt) = self.target_step {
+            // 0 turns mass scaling off; a negative step is left for the validation to refuse
+            p.target_time_step = (dt != 0.0).then_some(dt);
+        }
+    }
+}
+
 #[derive(clap::Args, Debug)]
 pub struct BiasArgs {
     #[command(flatten)]
     common: CommonArgs,
     /// Specimen width (mm).
-    #[arg(long, default_value_t = 150.0)]
+    #[arg(long, default_value_t = 150.0, allow_negative_numbers = true)]
     width: f64,
     /// Free length between the clamps (mm).
-    #[arg(long, default_value_t = 450.0)]
+    #[arg(long, default_value_t = 450.0, allow_negative_numbers = true)]
     length: f64,
+}
+
+#[derive(clap::Args, Debug)]
+pub struct UniaxialArgs {
+    #[command(flatten)]
+    common: CommonArgs,
+    /// Strip width (mm).
+    #[arg(long, default_value_t = 25.0, allow_negative_numbers = true)]
+    width: f64,
+    /// Free length between the clamps (mm).
+    #[arg(long, default_value_t = 150.0, allow_negative_numbers = true)]
+    length: f64,
+    /// Angle of the warp to the pulling direction (degrees): 0 warp, 90 weft, 45 bias.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    ply_angle: f64,
+}
+
+#[derive(clap::Args, Debug)]
+pub struct PictureFrameArgs {
+    #[command(flatten)]
+    common: CommonArgs,
+    /// Side of the frame and of the square specimen, hinge to hinge (mm).
+    #[arg(long, default_value_t = 150.0, allow_negative_numbers = true)]
+    side: f64,
 }
 
 pub fn run(command: &TestCommand) -> anyhow::Result<()> {
     match command {
         TestCommand::BiasExtension(args) => {
             with_threads(args.common.threads, || bias_extension(args))
+        }
+        TestCommand::Uniaxial(args) => with_threads(args.common.threads, || uniaxial(args)),
+        TestCommand::PictureFrame(args) => {
+            with_threads(args.common.threads, || picture_frame(args))
         }
     }
 }
@@ -101,16 +162,33 @@ fn with_threads(
 fn card_and_temperature(common: &CommonArgs) -> anyhow::Result<(MaterialCard, f64)> {
     let card = MaterialCard::load(&common.card)?;
     let temperature = match (common.temperature, &card.matrix) {
-        (Some(t), _) => t,
+        (Some(t), None) => t,
         (None, None) => 20.0,
-        (None, Some(matrix)) => {
+        (t, Some(matrix)) => {
             let (lo, hi) = matrix.parameters_range();
-            anyhow::bail!(
-                "--temperature is required: the card's matrix is tabulated from {lo} to {hi} °C"
-            )
+            match t {
+                None => anyhow::bail!(
+                    "--temperature is required: the card's matrix is tabulated from {lo} to {hi} °C"
+                ),
+                // refused here, as bad input, rather than by the first element of the run
+                Some(t) if !(lo..=hi).contains(&t) => anyhow::bail!(
+                    "--temperature {t}: outside the card's matrix table, {lo} to {hi} °C"
+                ),
+                Some(t) => t,
+            }
         }
     };
     Ok((card, temperature))
+}
+
+/// A specimen dimension given on the command line: a positive number, or an error naming the
+/// option.
+fn dimension(option: &str, value: f64) -> anyhow::Result<f64> {
+    if value.is_finite() && value > 0.0 {
+        Ok(value)
+    } else {
+        anyhow::bail!("--{option} = {value}: must be a positive length in mm")
+    }
 }
 
 fn bias_extension(args: &BiasArgs) -> anyhow::Result<()> {
@@ -119,35 +197,128 @@ fn bias_extension(args: &BiasArgs) -> anyhow::Result<()> {
     let mut test = BiasExtension::benchmark(temperature);
     test.width = args.width;
     test.length = args.length;
-    test.pattern = c.pattern;
-    test.damping = c.damping;
-    test.history_points = c.history_points.max(2);
-    if let Some(v) = c.speed {
-        test.speed = v;
-    }
-    if let Some(s) = c.time_scaling {
-        test.time_scaling = s;
-    }
-    if let Some(h) = c.element_size {
-        test.element_size = h;
-    }
-    if let Some(d) = c.end_displacement {
-        test.end_displacement = d;
-    }
-    if let Some(dt) = c.target_step {
-        test.target_time_step = (dt > 0.0).then_some(dt);
-    }
+    let mut process = bias_process(&test);
+    c.apply(&mut process);
+    let test = with_bias_process(test, process.clone());
+    // the shared process checks cover what the bias test's own do not (mass-scaling step,
+    // damping); its own come first, they name the specimen's numbers
     test.validate()
+        .and_then(|()| process.validate_on(("width", test.width)))
         .map_err(|e| anyhow::anyhow!("bias extension: {e}"))?;
-    let frames = frame_output(&c.output, "bias-extension", c.frames, test.history_points)?;
-    let mut bar = Bar::new(test.settings().end_time);
-    let result = test
-        .run(&card.laminate, card.density, frames, Some(&mut bar))
-        .map_err(|e| anyhow::anyhow!("bias extension: {e}"))?;
+    let shape = (test.settings().end_time, test.time_scaling);
+    run_and_report(
+        c,
+        ("bias extension", "bias-extension"),
+        shape,
+        test.history_points,
+        |frames, bar| {
+            let result = test.run(&card.laminate, card.density, frames, Some(bar))?;
+            let report = bias_report(&result.rows);
+            Ok((result.run, report))
+        },
+    )
+}
+
+/// The process settings of a bias-extension test, which keeps them as its own fields.
+fn bias_process(test: &BiasExtension) -> TestProcess {
+    TestProcess {
+        element_size: test.element_size,
+        pattern: test.pattern,
+        temperature: test.temperature,
+        speed: test.speed,
+        time_scaling: test.time_scaling,
+        end_displacement: test.end_displacement,
+        target_time_step: test.target_time_step,
+        damping: test.damping,
+        yarn_damping: test.yarn_damping,
+        history_points: test.history_points,
+    }
+}
+
+fn with_bias_process(test: BiasExtension, p: TestProcess) -> BiasExtension {
+    BiasExtension {
+        element_size: p.element_size,
+        pattern: p.pattern,
+        temperature: p.temperature,
+        speed: p.speed,
+        time_scaling: p.time_scaling,
+        end_displacement: p.end_displacement,
+        target_time_step: p.target_time_step,
+        damping: p.damping,
+        yarn_damping: p.yarn_damping,
+        history_points: p.history_points,
+        ..test
+    }
+}
+
+fn uniaxial(args: &UniaxialArgs) -> anyhow::Result<()> {
+    let c = &args.common;
+    let (card, temperature) = card_and_temperature(c)?;
+    let mut test = UniaxialTension::standard(temperature);
+    test.width = dimension("width", args.width)?;
+    test.length = dimension("length", args.length)?;
+    test.ply_angle = args.ply_angle;
+    c.apply(&mut test.process);
+    let names = ("uniaxial test", "uniaxial");
+    sheet_test(c, &card, names, &test, uniaxial_report)
+}
+
+fn picture_frame(args: &PictureFrameArgs) -> anyhow::Result<()> {
+    let c = &args.common;
+    let (card, temperature) = card_and_temperature(c)?;
+    let mut test = PictureFrame::standard(temperature);
+    test.side = dimension("side", args.side)?;
+    c.apply(&mut test.process);
+    let names = ("picture frame", "picture-frame");
+    sheet_test(c, &card, names, &test, picture_frame_report)
+}
+
+/// Validates and runs a [`SheetTest`] with the shared outputs; `names` as for
+/// [`run_and_report`], `report` turns its rows into columns and plots.
+fn sheet_test<T: SheetTest>(
+    c: &CommonArgs,
+    card: &MaterialCard,
+    names: (&str, &str),
+    test: &T,
+    report: fn(&[T::Row]) -> TestReport,
+) -> anyhow::Result<()> {
+    test.validate()
+        .map_err(|e| anyhow::anyhow!("{}: {e}", names.0))?;
+    let p = test.process();
+    let shape = (test.settings().end_time, p.time_scaling);
+    run_and_report(c, names, shape, p.history_points, |frames, bar| {
+        let result = test.run(&card.laminate, card.density, frames, Some(bar))?;
+        Ok((result.run, report(&result.rows)))
+    })
+}
+
+/// Runs a virtual test with the shared outputs: ParaView frames and a progress bar while it
+/// runs, then the CSV history, the plots and the summary table. `(label, name)`: the test in
+/// messages and the stem of its files; `(end_time, time_scaling)` of the run. `run` returns
+/// the test's run and its report; a run that went unstable keeps what it wrote and returns
+/// its solver error.
+fn run_and_report(
+    c: &CommonArgs,
+    (label, name): (&str, &str),
+    (end_time, time_scaling): (f64, f64),
+    history_points: usize,
+    run: impl FnOnce(Option<FrameOutput>, &mut dyn Progress) -> Result<(TestRun, TestReport), String>,
+) -> anyhow::Result<()> {
+    let frames = frame_output(&c.output, name, c.frames, history_points)?;
+    let wrote_frames = frames.is_some();
+    let mut bar = Bar::new(end_time);
+    let (run, report) = run(frames, &mut bar).map_err(|e| anyhow::anyhow!("{label}: {e}"))?;
     bar.finish();
-    let files = write_bias_outputs(&c.output, &result)?;
-    print_summary(&result.run.summary, test.time_scaling, &files);
-    result.run.outcome.map(|_| ()).map_err(anyhow::Error::from)
+    if run.records.is_empty() {
+        // stopped before its first record: nothing to write
+        return run.outcome.map(|_| ()).map_err(anyhow::Error::from);
+    }
+    let mut files = write_outputs(&c.output, name, &report, &run.records)?;
+    if wrote_frames {
+        files.push(c.output.join(format!("{name}.pvd")));
+    }
+    print_summary(&run.summary, time_scaling, &files);
+    run.outcome.map(|_| ()).map_err(anyhow::Error::from)
 }
 
 fn frame_output(
@@ -167,95 +338,179 @@ fn frame_output(
     }))
 }
 
-/// CSV history and the two plots; returns the files written.
-fn write_bias_outputs(dir: &Path, result: &BiasExtensionRun) -> anyhow::Result<Vec<PathBuf>> {
-    let csv = dir.join("bias-extension.csv");
-    let header = [
-        "time",
-        "displacement",
-        "force",
-        "shear_angle_deg",
-        "shear_angle_pin_jointed_deg",
-        "normalised_shear_force",
-        "kinetic",
-        "internal_work",
-        "elastic",
-        "viscous_dissipation",
-        "damping",
-        "external_work",
-        "energy_balance_error",
+/// What a finished test hands to the writer besides its records (which give the time,
+/// displacement, force and energy columns and the force plot): its name in titles, its own
+/// columns with one row of them per record, and its other plots, each `(file suffix, plot)`.
+struct TestReport {
+    title: &'static str,
+    columns: [&'static str; 3],
+    rows: Vec<[f64; 3]>,
+    plots: Vec<(&'static str, LinePlot)>,
+}
+
+/// Energy columns every history ends with.
+const ENERGY_COLUMNS: [&str; 7] = [
+    "kinetic",
+    "internal_work",
+    "elastic",
+    "viscous_dissipation",
+    "damping",
+    "external_work",
+    "energy_balance_error",
+];
+
+/// One CSV row: time, displacement and force of the record, the test's own cells, and the
+/// energies.
+fn history_row(record: &Record, own: &[f64; 3]) -> Vec<f64> {
+    let e = &record.energies;
+    let r = &record.reading;
+    let energies = [
+        e.kinetic,
+        e.internal_work,
+        e.elastic,
+        e.viscous_dissipation(),
+        e.damping,
+        e.external_work,
+        e.balance_error(),
     ];
-    let rows = result.rows.iter().zip(&result.run.records).map(|(r, rec)| {
-        let e = &rec.energies;
-        [
-            r.time,
-            r.displacement,
-            r.force,
-            r.shear_angle,
-            r.shear_angle_pin_jointed,
-            r.normalised_shear_force,
-            e.kinetic,
-            e.internal_work,
-            e.elastic,
-            e.viscous_dissipation(),
-            e.damping,
-            e.external_work,
-            e.balance_error(),
-        ]
-    });
+    [record.time, r.displacement, r.force]
+        .into_iter()
+        .chain(own.iter().copied())
+        .chain(energies)
+        .collect()
+}
+
+/// `<name>.csv`, `<name>-force.png` and `<name>-<suffix>.png` per further plot; returns the
+/// files written.
+fn write_outputs(
+    dir: &Path,
+    name: &str,
+    report: &TestReport,
+    records: &[Record],
+) -> anyhow::Result<Vec<PathBuf>> {
+    let csv = dir.join(format!("{name}.csv"));
+    let header: Vec<&str> = ["time", "displacement", "force"]
+        .into_iter()
+        .chain(report.columns)
+        .chain(ENERGY_COLUMNS)
+        .collect();
+    let rows = records
+        .iter()
+        .zip(&report.rows)
+        .map(|(record, own)| history_row(record, own));
     let file =
         std::fs::File::create(&csv).with_context(|| format!("cannot create {}", csv.display()))?;
     write_csv(&mut std::io::BufWriter::new(file), &header, rows)
         .with_context(|| format!("cannot write {}", csv.display()))?;
-    let force_png = dir.join("bias-extension-force.png");
-    let points =
-        |f: &dyn Fn(&crate::experiment::bias_extension::BiasRow) -> f64| -> Vec<(f64, f64)> {
-            result.rows.iter().map(|r| (r.displacement, f(r))).collect()
-        };
-    write_png(
-        &force_png,
-        &LinePlot {
-            title: "Bias extension: crosshead force".into(),
-            x_label: "crosshead displacement d (mm)".into(),
-            y_label: "force F (N)".into(),
-            series: vec![Series::new(
-                "simulation",
-                points(&|r| r.force),
+    let mut files = vec![csv];
+    let force = ("force", force_plot(report.title, records));
+    for (suffix, plot) in std::iter::once(&force).chain(&report.plots) {
+        let png = dir.join(format!("{name}-{suffix}.png"));
+        write_png(&png, plot, 900, 600)?;
+        files.push(png);
+    }
+    Ok(files)
+}
+
+/// The crosshead force against the displacement.
+fn force_plot(test: &str, records: &[Record]) -> LinePlot {
+    let points = records
+        .iter()
+        .map(|r| (r.reading.displacement, r.reading.force))
+        .collect();
+    LinePlot {
+        title: format!("{test}: crosshead force"),
+        x_label: DISPLACEMENT_LABEL.into(),
+        y_label: "force F (N)".into(),
+        series: vec![Series::new("simulation", points, LineStyle::Solid)],
+    }
+}
+
+const DISPLACEMENT_LABEL: &str = "crosshead displacement d (mm)";
+
+/// What names the columns and curves of a shear test (bias extension, picture frame).
+struct ShearTestNames {
+    title: &'static str,
+    /// The elements whose mean shear angle is watched.
+    zone: &'static str,
+    /// Column and curve label of the kinematic reference angle.
+    reference: (&'static str, &'static str),
+}
+
+const BIAS_EXTENSION: ShearTestNames = ShearTestNames {
+    title: "Bias extension",
+    zone: "central zone",
+    reference: ("shear_angle_pin_jointed_deg", "pin-jointed net"),
+};
+
+const PICTURE_FRAME: ShearTestNames = ShearTestNames {
+    title: "Picture frame",
+    zone: "interior",
+    reference: ("shear_angle_frame_deg", "frame (pin-jointed)"),
+};
+
+/// Report of a shear test whose rows give `(displacement, [shear angle, reference angle,
+/// normalised shear force])`: the three columns and a plot of the two angles.
+fn shear_test_report<R>(
+    names: &ShearTestNames,
+    rows: &[R],
+    values: fn(&R) -> (f64, [f64; 3]),
+) -> TestReport {
+    let rows: Vec<_> = rows.iter().map(values).collect();
+    let angle = |k: usize| rows.iter().map(|(d, v)| (*d, v[k])).collect::<Vec<_>>();
+    let plot = LinePlot {
+        title: format!("{}: shear angle of the {}", names.title, names.zone),
+        x_label: DISPLACEMENT_LABEL.into(),
+        y_label: "shear angle (°)".into(),
+        series: vec![
+            Series::new(
+                format!("simulation ({})", names.zone),
+                angle(0),
                 LineStyle::Solid,
-            )],
-        },
-        900,
-        600,
-    )?;
-    let shear_png = dir.join("bias-extension-shear-angle.png");
-    write_png(
-        &shear_png,
-        &LinePlot {
-            title: "Bias extension: shear angle of the central zone".into(),
-            x_label: "crosshead displacement d (mm)".into(),
-            y_label: "shear angle (°)".into(),
-            series: vec![
-                Series::new(
-                    "simulation (central zone)",
-                    points(&|r| r.shear_angle),
-                    LineStyle::Solid,
-                ),
-                Series::new(
-                    "pin-jointed net",
-                    points(&|r| r.shear_angle_pin_jointed),
-                    LineStyle::Dashed,
-                ),
-            ],
-        },
-        900,
-        600,
-    )?;
-    Ok(vec![
-        csv,
-        force_png,
-        shear_png,
-        dir.join("bias-extension.pvd"),
-    ])
+            ),
+            Series::new(names.reference.1, angle(1), LineStyle::Dashed),
+        ],
+    };
+    TestReport {
+        title: names.title,
+        columns: [
+            "shear_angle_deg",
+            names.reference.0,
+            "normalised_shear_force",
+        ],
+        rows: rows.into_iter().map(|(_, v)| v).collect(),
+        plots: vec![("shear-angle", plot)],
+    }
+}
+
+fn bias_report(rows: &[BiasRow]) -> TestReport {
+    shear_test_report(&BIAS_EXTENSION, rows, |r| {
+        let cells = [
+            r.shear_angle,
+            r.shear_angle_pin_jointed,
+            r.normalised_shear_force,
+        ];
+        (r.displacement, cells)
+    })
+}
+
+fn picture_frame_report(rows: &[PictureFrameRow]) -> TestReport {
+    shear_test_report(&PICTURE_FRAME, rows, |r| {
+        let cells = [r.shear_angle, r.shear_angle_frame, r.normalised_shear_force];
+        (r.displacement, cells)
+    })
+}
+
+fn uniaxial_report(rows: &[UniaxialRow]) -> TestReport {
+    TestReport {
+        title: "Uniaxial tension",
+        columns: ["strain", "stress_resultant", "shear_angle_deg"],
+        rows: rows
+            .iter()
+            .map(|r| [r.strain, r.stress_resultant, r.shear_angle])
+            .collect(),
+        plots: Vec::new(),
+    }
 }
 
 fn print_summary(s: &RunSummary, time_scaling: f64, files: &[PathBuf]) {

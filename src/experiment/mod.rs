@@ -4,4 +4,6 @@ pub mod bias_extension;
 pub mod ideal_net;
 pub mod kinematics;
 pub mod material_point;
+pub mod picture_frame;
 pub mod sheet_test;
+pub mod uniaxial;

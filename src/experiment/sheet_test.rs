@@ -3,6 +3,8 @@
 
 use crate::io::sheet_frame::sheet_frame;
 use crate::io::vtk::{PvdSeries, VtuFrame};
+use crate::material::Laminate;
+use crate::mesh::DiagonalPattern;
 use crate::solver::{self, Energies, Model, Observer, SolverError, SolverSettings, State};
 use std::time::Instant;
 
@@ -34,6 +36,169 @@ impl Crosshead {
     /// Time at which the displacement reaches `d` (at least the ramp time).
     pub fn time_to(&self, d: f64) -> f64 {
         self.ramp_time + (d / self.speed - 0.5 * self.ramp_time).max(0.0)
+    }
+}
+
+/// How a sheet test is run, apart from its specimen: mesh, temperature, crosshead travel and
+/// speed, time and mass scaling, damping, and how many history records to keep.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TestProcess {
+    /// Wanted edge length of the mesh cells (mm); each side gets a whole number of them.
+    pub element_size: f64,
+    /// How the cells are cut into triangles.
+    pub pattern: DiagonalPattern,
+    /// Isothermal test temperature (°C).
+    pub temperature: f64,
+    /// Crosshead speed of the physical test (mm/s).
+    pub speed: f64,
+    /// Time scaling `s` (MODEL.md §6): the crosshead runs `s` times faster in the simulation
+    /// and eta1 is divided by `s`, so the matrix sees the physical strain rates.
+    pub time_scaling: f64,
+    /// Crosshead travel when the test stops (mm).
+    pub end_displacement: f64,
+    /// Time step that mass scaling brings the smaller elements up to (s); `None` keeps the
+    /// physical density.
+    pub target_time_step: Option<f64>,
+    /// See [`SolverSettings::damping`] (1/s); it biases forces, keep it off to measure them.
+    pub damping: f64,
+    /// See [`SolverSettings::yarn_damping`] (fraction of critical).
+    pub yarn_damping: f64,
+    /// History records over the travel (the first, at rest, comes on top).
+    pub history_points: usize,
+}
+
+impl TestProcess {
+    /// Checks the numbers every test needs: sizes, speed and travel positive, time scaling at
+    /// least 1, a positive mass-scaling step if any, damping not negative; and at least two
+    /// cells across the specimen's narrowest side, `(name, length)`.
+    pub fn validate_on(&self, (side, length): (&str, f64)) -> Result<(), String> {
+        positive("element size", self.element_size)?;
+        positive("speed", self.speed)?;
+        positive("end displacement", self.end_displacement)?;
+        if let Some(dt) = self.target_time_step {
+            positive("target time step", dt)?;
+        }
+        let s = self.time_scaling;
+        if !(s.is_finite() && s >= 1.0) {
+            return Err(format!("time scaling = {s} must be >= 1"));
+        }
+        if !(self.damping.is_finite() && self.damping >= 0.0) {
+            return Err(format!("damping = {} must be >= 0", self.damping));
+        }
+        if !self.temperature.is_finite() {
+            return Err(format!(
+                "temperature = {} must be a number",
+                self.temperature
+            ));
+        }
+        if self.element_size > 0.5 * length {
+            return Err(format!(
+                "element size {} mm: at least two elements along the {side} ({length} mm) are \
+                 needed",
+                self.element_size
+            ));
+        }
+        Ok(())
+    }
+
+    /// The crosshead in simulated time: `speed x time_scaling`, smooth start over the first
+    /// 5 % of the travel.
+    pub fn crosshead(&self) -> Crosshead {
+        let simulated = self.speed * self.time_scaling;
+        Crosshead {
+            speed: simulated,
+            ramp_time: 0.05 * self.end_displacement / simulated,
+        }
+    }
+
+    /// Solver settings for the whole travel, a record every `1/history_points` of it, at 0.9
+    /// of the stable step.
+    pub fn settings(&self) -> SolverSettings {
+        let duration = self.crosshead().time_to(self.end_displacement);
+        SolverSettings {
+            output_interval: duration / self.history_points.max(1) as f64,
+            end_time: duration,
+            time_step_safety: 0.9,
+            target_time_step: self.target_time_step,
+            yarn_damping: self.yarn_damping,
+            damping: self.damping,
+        }
+    }
+
+    /// Cells along a side of `length` mm: the element size rounded, at least one.
+    pub fn cells(&self, length: f64) -> usize {
+        (length / self.element_size).round().max(1.0) as usize
+    }
+}
+
+/// `Ok` for a finite positive `value`, else a message naming it.
+pub fn positive(name: &str, value: f64) -> Result<(), String> {
+    if value.is_finite() && value > 0.0 {
+        Ok(())
+    } else {
+        Err(format!("{name} = {value} must be a positive number"))
+    }
+}
+
+/// How a test reads its specimen at a record (crosshead displacement, force, watched shear
+/// angle) from the model and the state.
+pub type Measurement = Box<dyn Fn(&Model, &State) -> Reading>;
+
+/// A run of a sheet test and its post-processed history, one row per record.
+pub struct SheetTestRun<Row> {
+    pub run: TestRun,
+    pub rows: Vec<Row>,
+}
+
+/// A virtual sheet test: a specimen, how it is held and pulled ([`SheetTest::model`]), what is
+/// read off it ([`SheetTest::measurement`]) and how the records become rows; the run itself is
+/// common to all ([`SheetTest::run`]).
+pub trait SheetTest {
+    /// One row of the test's history.
+    type Row;
+
+    fn process(&self) -> &TestProcess;
+
+    /// Checks the numbers a user gave.
+    fn validate(&self) -> Result<(), String>;
+
+    /// Meshed specimen with its constraints, on the time-scaled laminate.
+    fn model(&self, laminate: &Laminate, density: f64) -> Result<Model, String>;
+
+    /// Crosshead displacement, force and watched shear angle of `model` at a record.
+    fn measurement(&self, model: &Model) -> Result<Measurement, String>;
+
+    /// The history rows of a run.
+    fn rows(&self, run: &TestRun) -> Vec<Self::Row>;
+
+    fn settings(&self) -> SolverSettings {
+        self.process().settings()
+    }
+
+    /// Runs the test on `laminate` (of `density`); the records of the smooth start (two ramp
+    /// times) do not count for the energy figures of the summary.
+    fn run(
+        &self,
+        laminate: &Laminate,
+        density: f64,
+        frames: Option<FrameOutput>,
+        progress: Option<&mut dyn Progress>,
+    ) -> Result<SheetTestRun<Self::Row>, String> {
+        let model = self.model(laminate, density)?;
+        let measure = self.measurement(&model)?;
+        let settle_time = 2.0 * self.process().crosshead().ramp_time;
+        let run = run_sheet_test(
+            &model,
+            &self.settings(),
+            &measure,
+            frames,
+            progress,
+            settle_time,
+        );
+        Ok(SheetTestRun {
+            rows: self.rows(&run),
+            run,
+        })
     }
 }
 
