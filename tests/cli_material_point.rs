@@ -3,19 +3,10 @@
 
 mod common;
 
-use common::repo_path;
+use common::{repo_path, thermostamp};
 use std::path::PathBuf;
-use std::process::{Command, Output};
 
 const CARD: &str = "materials/t300-5hs-pps.toml";
-
-fn thermostamp(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_thermostamp"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("the binary runs")
-}
 
 /// `material-point` on the shipped card with `layer` and `history`.
 fn driver_args<'a>(layer: &'a str, history: &'a str) -> Vec<&'a str> {

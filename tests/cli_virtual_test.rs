@@ -1,15 +1,9 @@
 //! `thermostamp test bias-extension` run as a user runs it.
 
-use std::path::PathBuf;
-use std::process::{Command, Output};
+mod common;
 
-fn thermostamp(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_thermostamp"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("the binary runs")
-}
+use common::thermostamp;
+use std::path::PathBuf;
 
 #[test]
 fn bias_extension_writes_history_frames_and_plots() {

@@ -2,16 +2,10 @@
 //! history, ParaView frames and plots written, summary printed, bad options refused with exit
 //! code 2 and one line naming the option.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-fn thermostamp(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_thermostamp"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("the binary runs")
-}
+use common::thermostamp;
+use std::path::{Path, PathBuf};
 
 /// A fresh output folder under the target's temporary directory.
 fn out_dir(name: &str) -> PathBuf {

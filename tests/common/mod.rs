@@ -4,6 +4,7 @@
 use nalgebra::{Matrix3, Rotation3, Vector3};
 use proptest::prelude::*;
 use std::path::PathBuf;
+use std::process::{Command, Output};
 use thermostamp::material::MaterialCard;
 
 pub fn repo_path(relative: &str) -> PathBuf {
@@ -81,4 +82,13 @@ pub fn trellis(gamma: f64, la: f64, lb: f64, thickness_stretch: f64) -> Matrix3<
 /// Embeds an in-plane deformation gradient in 3D (the x–y plane stays at z = 0).
 pub fn in_plane(f: &nalgebra::Matrix2<f64>) -> nalgebra::Matrix3x2<f64> {
     nalgebra::Matrix3x2::new(f[(0, 0)], f[(0, 1)], f[(1, 0)], f[(1, 1)], 0.0, 0.0)
+}
+
+/// The `thermostamp` binary run from the repository root, as a user runs it.
+pub fn thermostamp(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_thermostamp"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("the binary runs")
 }
