@@ -10,6 +10,7 @@ use nalgebra::Matrix3;
 use std::path::Path;
 use std::time::{Duration, Instant};
 use thermostamp::experiment::bias_extension::BiasExtension;
+use thermostamp::experiment::sheet_test::SheetTest;
 use thermostamp::material::MaterialCard;
 use thermostamp::solver::{self, InternalForces, Model, Observer, SolverSettings, State};
 
@@ -78,7 +79,7 @@ fn main() {
     );
     for size in [2.0, 1.0] {
         let mut test = BiasExtension::benchmark(TEMPERATURE);
-        test.element_size = size;
+        test.process.element_size = size;
         let model = test.model(&card.laminate, card.density).expect("model");
         let settings = test.settings();
         let elements = model.elements.len() as f64;

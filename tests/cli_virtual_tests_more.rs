@@ -186,3 +186,36 @@ fn bad_options_are_exit_code_2_with_one_line_naming_them() {
         assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
     }
 }
+
+/// A crosshead faster than 1 % of the sheet's shear wave speed gets a warning before the run
+/// (the stiff-yarn fabric: `G = 2 c1 = 0.2 MPa`, `rho = 1e-9`, `c = 14142 mm/s`); a slow one
+/// none. The run goes on either way.
+#[test]
+fn fast_crosshead_is_warned_about() {
+    for (speed, warned) in [("50", false), ("500", true)] {
+        let dir = out_dir(&format!("warn-{speed}"));
+        let out = thermostamp(&[
+            "test",
+            "uniaxial",
+            "--card",
+            "tests/data/stiff-yarn-fabric.toml",
+            "--time-scaling",
+            "1",
+            "--speed",
+            speed,
+            "--end-displacement",
+            "0.5",
+            "--frames",
+            "0",
+            "--output",
+            dir.to_str().unwrap(),
+        ]);
+        assert!(out.status.success());
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(
+            stderr.contains("% of the specimen's shear wave speed"),
+            warned,
+            "{speed} mm/s: {stderr}"
+        );
+    }
+}

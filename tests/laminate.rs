@@ -278,3 +278,21 @@ fn shared_skins_solve_like_separate_layers() {
         );
     }
 }
+
+/// Small simple shear in the yarn frame: the neo-Hookean skins resist with `mu = 2 C10`, the
+/// fabric with `2 W_s'(0)` (`I10 = sin^2 gamma`, so `W_s ~ W_s'(0) gamma^2`); the laminate's
+/// initial shear modulus is their thickness-weighted mean.
+#[test]
+fn initial_shear_modulus_is_the_thickness_mean_of_the_layers() {
+    let card = t300_card();
+    let skins = card.matrix.as_ref().unwrap().parameters_at(T).unwrap();
+    let layers = card.laminate.layers();
+    let (t_a, t_b) = (layers[0].thickness, layers[1].thickness);
+    let expected = (2.0 * t_a * 2.0 * skins.c10 + t_b * 2.0 * card.fabric.shear.derivative(0.0))
+        / (2.0 * t_a + t_b);
+    let g = card.laminate.shear_modulus(T).unwrap();
+    assert!(
+        (g / expected - 1.0).abs() < 1e-2,
+        "{g} MPa, expected {expected} MPa"
+    );
+}

@@ -10,7 +10,7 @@ use common::repo_path;
 use thermostamp::experiment::bias_extension::{BiasExtension, BiasExtensionRun};
 use thermostamp::experiment::ideal_net::{fabric_trellis_energy, IdealNetBias};
 use thermostamp::experiment::kinematics::bias_extension_displacement;
-use thermostamp::experiment::sheet_test::mean_shear_angle;
+use thermostamp::experiment::sheet_test::{mean_shear_angle, SheetTest};
 use thermostamp::material::MaterialCard;
 use thermostamp::solver::Model;
 
@@ -22,12 +22,12 @@ fn stiff_yarn_fabric() -> MaterialCard {
 /// until the pin-jointed central zone passes 40°.
 fn coarse_test() -> BiasExtension {
     let mut test = BiasExtension::benchmark(20.0);
-    test.element_size = 25.0;
-    test.speed = 100.0;
-    test.time_scaling = 1.0;
-    test.target_time_step = None;
-    test.end_displacement = bias_extension_displacement(150.0, 450.0, 40.5f64.to_radians());
-    test.history_points = 60;
+    test.process.element_size = 25.0;
+    test.process.speed = 100.0;
+    test.process.time_scaling = 1.0;
+    test.process.target_time_step = None;
+    test.process.end_displacement = bias_extension_displacement(150.0, 450.0, 40.5f64.to_radians());
+    test.process.history_points = 60;
     test
 }
 
@@ -143,7 +143,7 @@ fn central_zone_and_force_follow_the_equilibrium_of_the_inextensible_net() {
 fn three_zones_energy_balance_and_normalised_shear_force() {
     let card = stiff_yarn_fabric();
     let mut test = coarse_test();
-    test.end_displacement = 75.0;
+    test.process.end_displacement = 75.0;
     let (model, result) = run(&test, &card);
     let state = result.run.outcome.as_ref().expect("the run finishes");
     let s = &result.run.summary;
@@ -205,9 +205,9 @@ fn force_converges_under_mesh_refinement() {
         .iter()
         .map(|&size| {
             let mut test = coarse_test();
-            test.element_size = size;
-            test.end_displacement = 30.0;
-            test.history_points = 6;
+            test.process.element_size = size;
+            test.process.end_displacement = 30.0;
+            test.process.history_points = 6;
             let result = test.run(&card.laminate, card.density, None, None).unwrap();
             assert!(
                 result.run.outcome.is_ok(),

@@ -193,3 +193,39 @@ fn faster_test_needs_more_force_and_time_scaling_gives_back_the_slow_force() {
         );
     }
 }
+
+/// The viscous melt on physical mass, pulled at 50 mm/s to 22 mm (about 17° of shear): the
+/// viscous stress `2 eta1 (I1 - 3) Cdot` damps the highest mode of each element more and more
+/// as the sheet shears, and the explicit step must shrink with it (`sqrt(1 + xi^2) - xi`, xi
+/// from the melt's viscosity) or the run blows up (it did at 17 mm before the solver knew the
+/// viscosity). With the step following the viscosity the run completes, its last step is far
+/// below the step of the same run without viscosity, and its force agrees with a mass-scaled run (5e-4 s step)
+/// whose added inertia is small once past the start (10 mm).
+#[test]
+fn stable_step_follows_the_matrix_viscosity() {
+    let card = card("tests/data/viscous-prepreg.toml");
+    let mut physical = viscous_frame(50.0, 1.0, 5e-4);
+    physical.process.target_time_step = None;
+    physical.process.end_displacement = 22.0;
+    let mut scaled = physical.clone();
+    scaled.process.target_time_step = Some(5e-4);
+    let inviscid = physical
+        .run(&card.laminate.time_scaled(1e12), card.density, None, None)
+        .unwrap();
+    let (physical, scaled) = (run(&physical, &card), run(&scaled, &card));
+    let (step, elastic_step) = (
+        physical.run.summary.time_step,
+        inviscid.run.summary.time_step,
+    );
+    assert!(
+        step < 0.1 * elastic_step,
+        "last step {step} s, {elastic_step} s without the viscosity"
+    );
+    for d in [10.0, 14.0, 18.0, 22.0] {
+        let (f, f_scaled) = (force_at(&physical.rows, d), force_at(&scaled.rows, d));
+        assert!(
+            (f - f_scaled).abs() < 0.03 * f_scaled,
+            "d = {d} mm: physical mass {f} N, mass-scaled {f_scaled} N"
+        );
+    }
+}

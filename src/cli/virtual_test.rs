@@ -5,6 +5,7 @@ use crate::experiment::bias_extension::{BiasExtension, BiasRow};
 use crate::experiment::picture_frame::{PictureFrame, PictureFrameRow};
 use crate::experiment::sheet_test::{
     FrameOutput, Progress, Record, RunSummary, SheetTest, TestProcess, TestRun,
+    QUASI_STATIC_SPEED_RATIO,
 };
 use crate::experiment::uniaxial::{UniaxialRow, UniaxialTension};
 use crate::io::plot::{write_png, LinePlot, LineStyle, Series};
@@ -197,58 +198,9 @@ fn bias_extension(args: &BiasArgs) -> anyhow::Result<()> {
     let mut test = BiasExtension::benchmark(temperature);
     test.width = args.width;
     test.length = args.length;
-    let mut process = bias_process(&test);
-    c.apply(&mut process);
-    let test = with_bias_process(test, process.clone());
-    // the shared process checks cover what the bias test's own do not (mass-scaling step,
-    // damping); its own come first, they name the specimen's numbers
-    test.validate()
-        .and_then(|()| process.validate_on(("width", test.width)))
-        .map_err(|e| anyhow::anyhow!("bias extension: {e}"))?;
-    let shape = (test.settings().end_time, test.time_scaling);
-    run_and_report(
-        c,
-        ("bias extension", "bias-extension"),
-        shape,
-        test.history_points,
-        |frames, bar| {
-            let result = test.run(&card.laminate, card.density, frames, Some(bar))?;
-            let report = bias_report(&result.rows);
-            Ok((result.run, report))
-        },
-    )
-}
-
-/// The process settings of a bias-extension test, which keeps them as its own fields.
-fn bias_process(test: &BiasExtension) -> TestProcess {
-    TestProcess {
-        element_size: test.element_size,
-        pattern: test.pattern,
-        temperature: test.temperature,
-        speed: test.speed,
-        time_scaling: test.time_scaling,
-        end_displacement: test.end_displacement,
-        target_time_step: test.target_time_step,
-        damping: test.damping,
-        yarn_damping: test.yarn_damping,
-        history_points: test.history_points,
-    }
-}
-
-fn with_bias_process(test: BiasExtension, p: TestProcess) -> BiasExtension {
-    BiasExtension {
-        element_size: p.element_size,
-        pattern: p.pattern,
-        temperature: p.temperature,
-        speed: p.speed,
-        time_scaling: p.time_scaling,
-        end_displacement: p.end_displacement,
-        target_time_step: p.target_time_step,
-        damping: p.damping,
-        yarn_damping: p.yarn_damping,
-        history_points: p.history_points,
-        ..test
-    }
+    c.apply(&mut test.process);
+    let names = ("bias extension", "bias-extension");
+    sheet_test(c, &card, names, &test, bias_report)
 }
 
 fn uniaxial(args: &UniaxialArgs) -> anyhow::Result<()> {
@@ -284,12 +236,28 @@ fn sheet_test<T: SheetTest>(
 ) -> anyhow::Result<()> {
     test.validate()
         .map_err(|e| anyhow::anyhow!("{}: {e}", names.0))?;
+    warn_if_dynamic(test, card).map_err(|e| anyhow::anyhow!("{}: {e}", names.0))?;
     let p = test.process();
     let shape = (test.settings().end_time, p.time_scaling);
     run_and_report(c, names, shape, p.history_points, |frames, bar| {
         let result = test.run(&card.laminate, card.density, frames, Some(bar))?;
         Ok((result.run, report(&result.rows)))
     })
+}
+
+/// A warning on standard error when the crosshead is too fast for a quasi-static test.
+fn warn_if_dynamic<T: SheetTest>(test: &T, card: &MaterialCard) -> Result<(), String> {
+    let ratio = test.speed_to_shear_wave(&card.laminate, card.density)?;
+    if ratio > QUASI_STATIC_SPEED_RATIO {
+        eprintln!(
+            "warning: the crosshead moves at {:.1} % of the specimen's shear wave speed (more \
+             than {} %): its inertia will show in the force; lower --speed, --time-scaling or \
+             --target-step",
+            100.0 * ratio,
+            100.0 * QUASI_STATIC_SPEED_RATIO
+        );
+    }
+    Ok(())
 }
 
 /// Runs a virtual test with the shared outputs: ParaView frames and a progress bar while it
@@ -517,15 +485,20 @@ fn print_summary(s: &RunSummary, time_scaling: f64, files: &[PathBuf]) {
     let rows = [
         ("steps", format!("{}", s.steps)),
         ("elements", format!("{}", s.elements)),
-        ("last time step", format!("{:.3e} s", s.time_step)),
+        (
+            "last time step",
+            known(s.time_step, || format!("{:.3e} s", s.time_step)),
+        ),
         (
             "added mass (mass scaling)",
-            format!(
-                "{:.3e} t ({:.1} x the physical {:.3e} t)",
-                s.added_mass,
-                s.added_mass / s.physical_mass,
-                s.physical_mass
-            ),
+            known(s.added_mass, || {
+                format!(
+                    "{:.3e} t ({:.1} x the physical {:.3e} t)",
+                    s.added_mass,
+                    s.added_mass / s.physical_mass,
+                    s.physical_mass
+                )
+            }),
         ),
         (
             "time scaling",
@@ -558,6 +531,15 @@ fn print_summary(s: &RunSummary, time_scaling: f64, files: &[PathBuf]) {
     println!("{:-<64}", "");
     for f in files {
         println!("wrote {}", f.display());
+    }
+}
+
+/// `text()` for a figure the run got to, a dash for one a stopped run did not.
+fn known(value: f64, text: impl FnOnce() -> String) -> String {
+    if value.is_finite() {
+        text()
+    } else {
+        "- (the run stopped)".into()
     }
 }
 

@@ -4,16 +4,15 @@
 
 use super::kinematics::{bias_extension_normalised_shear_force, bias_extension_shear_angle};
 use super::sheet_test::{
-    mean_shear_angle, reaction_along, run_sheet_test, Crosshead, FrameOutput, Progress, Reading,
-    TestRun,
+    clamped_strip, clamped_strip_measurement, validate_strip, Measurement, SheetTest, SheetTestRun,
+    TestProcess, TestRun,
 };
 use crate::material::Laminate;
-use crate::mesh::{rectangle, DiagonalPattern};
-use crate::solver::{Constraint, Model, Motion, SolverSettings};
+use crate::mesh::DiagonalPattern;
+use crate::solver::Model;
 use nalgebra::Vector3;
-use std::sync::Arc;
 
-/// A bias-extension test: specimen, mesh, process and output density.
+/// A bias-extension test: specimen, ply angle, and the shared process settings.
 #[derive(Clone, Debug, PartialEq)]
 pub struct BiasExtension {
     /// Specimen width W and free length H between the clamps (mm), H/W >= 2.
@@ -21,25 +20,7 @@ pub struct BiasExtension {
     pub length: f64,
     /// Warp angle to the specimen's width direction x (degrees), 45 for the standard test.
     pub ply_angle: f64,
-    /// Target element size (mm) and cell pattern.
-    pub element_size: f64,
-    pub pattern: DiagonalPattern,
-    /// Test temperature (°C).
-    pub temperature: f64,
-    /// Physical crosshead speed (mm/s).
-    pub speed: f64,
-    /// Time scaling: the simulation runs this many times faster, with eta1 divided by it.
-    pub time_scaling: f64,
-    /// Crosshead travel at the end of the test (mm).
-    pub end_displacement: f64,
-    /// Mass scaling to this time step (s), if any.
-    pub target_time_step: Option<f64>,
-    /// Global mass-proportional damping (1/s), see [`SolverSettings::damping`].
-    pub damping: f64,
-    /// Yarn-rate damping, fraction of critical, see [`SolverSettings::yarn_damping`].
-    pub yarn_damping: f64,
-    /// Number of history records.
-    pub history_points: usize,
+    pub process: TestProcess,
 }
 
 /// One row of the bias-extension history.
@@ -57,10 +38,7 @@ pub struct BiasRow {
 }
 
 /// The run and its post-processed history.
-pub struct BiasExtensionRun {
-    pub run: TestRun,
-    pub rows: Vec<BiasRow>,
-}
+pub type BiasExtensionRun = SheetTestRun<BiasRow>;
 
 impl BiasExtension {
     /// The benchmark specimen of Cao et al. 2008: 150 x 450 mm, ±45°, pulled 60 mm at
@@ -75,99 +53,25 @@ impl BiasExtension {
             width: 150.0,
             length: 450.0,
             ply_angle: 45.0,
-            element_size: 15.0,
-            pattern: DiagonalPattern::Crossed,
-            temperature,
-            speed: 20.0 / 60.0,
-            time_scaling: 300.0,
-            end_displacement: 60.0,
-            target_time_step: None,
-            damping: 0.0,
-            yarn_damping: 0.06,
-            history_points: 120,
-        }
-    }
-
-    /// Checks the numbers a user gave.
-    pub fn validate(&self) -> Result<(), String> {
-        let positive = [
-            ("width", self.width),
-            ("length", self.length),
-            ("element size", self.element_size),
-            ("speed", self.speed),
-            ("end displacement", self.end_displacement),
-        ];
-        for (name, v) in positive {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(format!("{name} = {v} must be a positive number"));
-            }
-        }
-        if !(self.time_scaling.is_finite() && self.time_scaling >= 1.0) {
-            return Err(format!("time scaling = {} must be >= 1", self.time_scaling));
-        }
-        if self.length < 2.0 * self.width {
-            return Err(format!(
-                "length/width = {:.3}: the bias-extension kinematics needs a free length of at least twice the width",
-                self.length / self.width
-            ));
-        }
-        let limit = (std::f64::consts::SQRT_2 - 1.0) * (self.length - self.width);
-        if self.end_displacement >= limit {
-            return Err(format!(
-                "end displacement {} mm reaches the pin-jointed limit of {limit:.1} mm (90° of shear)",
-                self.end_displacement
-            ));
-        }
-        if self.element_size > 0.25 * self.width {
-            return Err(format!(
-                "element size {} mm: at least four elements across the width are needed",
-                self.element_size
-            ));
-        }
-        Ok(())
-    }
-
-    /// The crosshead in simulated time.
-    pub fn crosshead(&self) -> Crosshead {
-        let speed = self.speed * self.time_scaling;
-        Crosshead {
-            speed,
-            ramp_time: 0.05 * self.end_displacement / speed,
-        }
-    }
-
-    /// Meshed specimen, bottom clamp fixed, top clamp moving along +y; the laminate is
-    /// time-scaled.
-    pub fn model(&self, laminate: &Laminate, density: f64) -> Result<Model, String> {
-        self.validate()?;
-        let nx = (self.width / self.element_size).round().max(1.0) as usize;
-        let ny = (self.length / self.element_size).round().max(1.0) as usize;
-        let mesh = rectangle(self.width, self.length, nx, ny, self.pattern);
-        let crosshead = self.crosshead();
-        let constraints = vec![
-            Constraint {
-                name: "bottom clamp".into(),
-                nodes: mesh.node_set("bottom").map_err(|e| e.to_string())?.to_vec(),
-                motion: Motion::Fixed,
+            process: TestProcess {
+                element_size: 15.0,
+                pattern: DiagonalPattern::Crossed,
+                temperature,
+                speed: 20.0 / 60.0,
+                time_scaling: 300.0,
+                end_displacement: 60.0,
+                target_time_step: None,
+                damping: 0.0,
+                yarn_damping: 0.06,
+                history_points: 120,
             },
-            Constraint {
-                name: "top clamp".into(),
-                nodes: mesh.node_set("top").map_err(|e| e.to_string())?.to_vec(),
-                motion: Motion::Velocity(Arc::new(move |t, _| {
-                    Vector3::new(0.0, crosshead.velocity(t), 0.0)
-                })),
-            },
-        ];
-        let angle = self.ply_angle.to_radians();
-        Model::new(
-            mesh,
-            laminate.time_scaled(self.time_scaling),
-            density,
-            self.temperature,
-            Vector3::new(angle.cos(), angle.sin(), 0.0),
-            constraints,
-        )
-        .map_err(|e| e.to_string())
+        }
+    }
+
+    /// The warp: the width direction x turned by the ply angle towards +y.
+    pub fn warp_direction(&self) -> Vector3<f64> {
+        let (s, c) = self.ply_angle.to_radians().sin_cos();
+        Vector3::new(c, s, 0.0)
     }
 
     /// Elements whose reference centroid lies in the central square of side W/3: deep inside
@@ -181,50 +85,60 @@ impl BiasExtension {
             })
             .collect()
     }
+}
 
-    pub fn settings(&self) -> SolverSettings {
-        let end_time = self.crosshead().time_to(self.end_displacement);
-        SolverSettings {
-            end_time,
-            time_step_safety: 0.9,
-            target_time_step: self.target_time_step,
-            output_interval: end_time / self.history_points.max(1) as f64,
-            damping: self.damping,
-            yarn_damping: self.yarn_damping,
-        }
+impl SheetTest for BiasExtension {
+    type Row = BiasRow;
+
+    fn process(&self) -> &TestProcess {
+        &self.process
     }
 
-    /// Runs the test on `laminate` (of `density`).
-    pub fn run(
-        &self,
-        laminate: &Laminate,
-        density: f64,
-        frames: Option<FrameOutput>,
-        progress: Option<&mut dyn Progress>,
-    ) -> Result<BiasExtensionRun, String> {
-        let model = self.model(laminate, density)?;
-        let zone = self.central_zone(&model);
-        let crosshead = self.crosshead();
-        let top = model
-            .mesh
-            .node_set("top")
-            .map_err(|e| e.to_string())?
-            .to_vec();
-        let measure = move |model: &Model, state: &crate::solver::State| Reading {
-            displacement: crosshead.displacement(state.time),
-            force: reaction_along(state, &top, &Vector3::y()),
-            shear_angle: mean_shear_angle(model, state, &zone),
-        };
-        let run = run_sheet_test(
-            &model,
-            &self.settings(),
-            &measure,
-            frames,
-            progress,
-            crosshead.ramp_time * 2.0,
-        );
-        let rows = self.rows(&run);
-        Ok(BiasExtensionRun { run, rows })
+    /// The specimen's numbers first (they name the test's geometry), then the shared process
+    /// checks; four cells across the width at least, so that the central zone has elements.
+    fn validate(&self) -> Result<(), String> {
+        validate_strip(self.width, self.length, self.ply_angle)?;
+        if self.length < 2.0 * self.width {
+            return Err(format!(
+                "length/width = {:.3}: the bias-extension kinematics needs a free length of at \
+                 least twice the width",
+                self.length / self.width
+            ));
+        }
+        let p = &self.process;
+        let limit = (std::f64::consts::SQRT_2 - 1.0) * (self.length - self.width);
+        if p.end_displacement >= limit {
+            return Err(format!(
+                "end displacement {} mm reaches the pin-jointed limit of {limit:.1} mm (90° of \
+                 shear)",
+                p.end_displacement
+            ));
+        }
+        if p.element_size > 0.25 * self.width {
+            return Err(format!(
+                "element size {} mm: at least four elements across the width are needed",
+                p.element_size
+            ));
+        }
+        p.validate_on(("width", self.width))
+    }
+
+    /// Meshed specimen, bottom clamp fixed, top clamp moving along +y; the laminate is
+    /// time-scaled.
+    fn model(&self, laminate: &Laminate, density: f64) -> Result<Model, String> {
+        self.validate()?;
+        clamped_strip(
+            (self.width, self.length),
+            self.warp_direction(),
+            &self.process,
+            laminate,
+            density,
+        )
+    }
+
+    /// Force: the top clamp's reaction along the pull; shear angle: the central zone's.
+    fn measurement(&self, model: &Model) -> Result<Measurement, String> {
+        clamped_strip_measurement(model, &self.process, self.central_zone(model))
     }
 
     fn rows(&self, run: &TestRun) -> Vec<BiasRow> {

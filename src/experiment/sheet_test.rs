@@ -4,8 +4,12 @@
 use crate::io::sheet_frame::sheet_frame;
 use crate::io::vtk::{PvdSeries, VtuFrame};
 use crate::material::Laminate;
-use crate::mesh::DiagonalPattern;
-use crate::solver::{self, Energies, Model, Observer, SolverError, SolverSettings, State};
+use crate::mesh::{rectangle, DiagonalPattern};
+use crate::solver::{
+    self, Constraint, Energies, Model, Motion, Observer, SolverError, SolverSettings, State,
+};
+use nalgebra::Vector3;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// Crosshead displacement history: a smooth start over `ramp_time`, then constant `speed`
@@ -140,6 +144,10 @@ pub fn positive(name: &str, value: f64) -> Result<(), String> {
     }
 }
 
+/// Crosshead speed over shear wave speed above which a test is not quasi-static any more: the
+/// force carries the inertia of the specimen.
+pub const QUASI_STATIC_SPEED_RATIO: f64 = 0.01;
+
 /// How a test reads its specimen at a record (crosshead displacement, force, watched shear
 /// angle) from the model and the state.
 pub type Measurement = Box<dyn Fn(&Model, &State) -> Reading>;
@@ -173,6 +181,28 @@ pub trait SheetTest {
 
     fn settings(&self) -> SolverSettings {
         self.process().settings()
+    }
+
+    /// The crosshead speed in the simulation over the slowest wave of the specimen at rest,
+    /// the shear wave `sqrt(G / rho)` ([`Laminate::shear_modulus`], `rho` the area-weighted
+    /// mean density after mass scaling). Above about [`QUASI_STATIC_SPEED_RATIO`] the
+    /// specimen's inertia shows in the force.
+    fn speed_to_shear_wave(&self, laminate: &Laminate, density: f64) -> Result<f64, String> {
+        let model = self.model(laminate, density)?;
+        let rest = State::at_rest(&model, &self.settings()).map_err(|e| e.to_string())?;
+        let area: f64 = model.elements.iter().map(|e| e.area).sum();
+        let rho = model
+            .elements
+            .iter()
+            .zip(&rest.densities)
+            .map(|(e, rho)| rho * e.area)
+            .sum::<f64>()
+            / area;
+        let g = model
+            .laminate
+            .shear_modulus(model.temperature)
+            .map_err(|e| e.to_string())?;
+        Ok(self.process().crosshead().speed / (g / rho).sqrt())
     }
 
     /// Runs the test on `laminate` (of `density`); the records of the smooth start (two ramp
@@ -368,6 +398,85 @@ pub fn run_sheet_test(
     }
 }
 
+/// Checks a rectangular specimen's width and length (positive) and its ply angle (a number).
+pub fn validate_strip(width: f64, length: f64, ply_angle: f64) -> Result<(), String> {
+    positive("width", width)?;
+    positive("length", length)?;
+    if ply_angle.is_finite() {
+        Ok(())
+    } else {
+        Err(format!("ply angle = {ply_angle} must be a number"))
+    }
+}
+
+/// A `width x length` strip meshed by `process`, its bottom edge clamped and its top edge
+/// moved along +y with the process's crosshead, warp along `warp`; the laminate is
+/// time-scaled (MODEL.md §6). The uniaxial and bias-extension specimens.
+pub fn clamped_strip(
+    (width, length): (f64, f64),
+    warp: Vector3<f64>,
+    process: &TestProcess,
+    laminate: &Laminate,
+    density: f64,
+) -> Result<Model, String> {
+    let mesh = rectangle(
+        width,
+        length,
+        process.cells(width),
+        process.cells(length),
+        process.pattern,
+    );
+    let crosshead = process.crosshead();
+    let set = |name: &str| {
+        mesh.node_set(name)
+            .map(<[usize]>::to_vec)
+            .map_err(|e| e.to_string())
+    };
+    let constraints = vec![
+        Constraint {
+            name: "bottom clamp".into(),
+            nodes: set("bottom")?,
+            motion: Motion::Fixed,
+        },
+        Constraint {
+            name: "top clamp".into(),
+            nodes: set("top")?,
+            motion: Motion::Velocity(Arc::new(move |t, _| {
+                Vector3::new(0.0, crosshead.velocity(t), 0.0)
+            })),
+        },
+    ];
+    Model::new(
+        mesh,
+        laminate.time_scaled(process.time_scaling),
+        density,
+        process.temperature,
+        warp,
+        constraints,
+    )
+    .map_err(|e| e.to_string())
+}
+
+/// What a [`clamped_strip`] reads: the crosshead displacement, the top clamp's reaction along
+/// the pull, and the mean shear angle of the elements of `zone`.
+pub fn clamped_strip_measurement(
+    model: &Model,
+    process: &TestProcess,
+    zone: Vec<usize>,
+) -> Result<Measurement, String> {
+    let crosshead = process.crosshead();
+    let top = model
+        .mesh
+        .node_set("top")
+        .map_err(|e| e.to_string())?
+        .to_vec();
+    Ok(Box::new(move |model: &Model, state: &State| Reading {
+        displacement: crosshead.displacement(state.time),
+        force: reaction_along(state, &top, &Vector3::y()),
+        shear_angle: mean_shear_angle(model, state, &zone),
+    }))
+}
+
 /// Mean shear angle (degrees) of the elements listed in `zone`.
 pub fn mean_shear_angle(model: &Model, state: &State, zone: &[usize]) -> f64 {
     use crate::material::fabric::shear_angle;
@@ -386,7 +495,7 @@ pub fn mean_shear_angle(model: &Model, state: &State, zone: &[usize]) -> f64 {
 }
 
 /// Sum of the reactions on `nodes` along `direction` (N).
-pub fn reaction_along(state: &State, nodes: &[usize], direction: &nalgebra::Vector3<f64>) -> f64 {
+pub fn reaction_along(state: &State, nodes: &[usize], direction: &Vector3<f64>) -> f64 {
     nodes
         .iter()
         .map(|&n| state.reactions[n].dot(direction))

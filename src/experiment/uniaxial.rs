@@ -10,14 +10,13 @@
 //! between the clamps like a bias-extension specimen and are far softer.
 
 use super::sheet_test::{
-    mean_shear_angle, positive, reaction_along, Measurement, Reading, SheetTest, SheetTestRun,
+    clamped_strip, clamped_strip_measurement, validate_strip, Measurement, SheetTest, SheetTestRun,
     TestProcess, TestRun,
 };
 use crate::material::Laminate;
-use crate::mesh::{rectangle, DiagonalPattern};
-use crate::solver::{Constraint, Model, Motion, State};
+use crate::mesh::DiagonalPattern;
+use crate::solver::Model;
 use nalgebra::Vector3;
-use std::sync::Arc;
 
 /// A strip tension test: specimen, ply angle, and the shared process settings.
 #[derive(Clone, Debug, PartialEq)]
@@ -102,11 +101,7 @@ impl SheetTest for UniaxialTension {
     }
 
     fn validate(&self) -> Result<(), String> {
-        positive("width", self.width)?;
-        positive("length", self.length)?;
-        if !self.ply_angle.is_finite() {
-            return Err(format!("ply angle = {} must be a number", self.ply_angle));
-        }
+        validate_strip(self.width, self.length, self.ply_angle)?;
         self.process.validate_on(("width", self.width))?;
         if self.process.end_displacement >= self.length {
             return Err(format!(
@@ -121,59 +116,19 @@ impl SheetTest for UniaxialTension {
     /// Meshed strip, bottom clamp fixed, top clamp moving along +y with the crosshead.
     fn model(&self, laminate: &Laminate, density: f64) -> Result<Model, String> {
         self.validate()?;
-        let p = &self.process;
-        let mesh = rectangle(
-            self.width,
-            self.length,
-            p.cells(self.width),
-            p.cells(self.length),
-            p.pattern,
-        );
-        let crosshead = p.crosshead();
-        let set = |name: &str| {
-            mesh.node_set(name)
-                .map(<[usize]>::to_vec)
-                .map_err(|e| e.to_string())
-        };
-        let constraints = vec![
-            Constraint {
-                name: "bottom clamp".into(),
-                nodes: set("bottom")?,
-                motion: Motion::Fixed,
-            },
-            Constraint {
-                name: "top clamp".into(),
-                nodes: set("top")?,
-                motion: Motion::Velocity(Arc::new(move |t, _| {
-                    Vector3::new(0.0, crosshead.velocity(t), 0.0)
-                })),
-            },
-        ];
-        Model::new(
-            mesh,
-            laminate.time_scaled(p.time_scaling),
+        let warp = self.warp_direction();
+        clamped_strip(
+            (self.width, self.length),
+            warp,
+            &self.process,
+            laminate,
             density,
-            p.temperature,
-            self.warp_direction(),
-            constraints,
         )
-        .map_err(|e| e.to_string())
     }
 
     /// Force: the top clamp's reaction along the pull; shear angle: the gauge section's.
     fn measurement(&self, model: &Model) -> Result<Measurement, String> {
-        let gauge = self.gauge_section(model);
-        let crosshead = self.process.crosshead();
-        let top = model
-            .mesh
-            .node_set("top")
-            .map_err(|e| e.to_string())?
-            .to_vec();
-        Ok(Box::new(move |model: &Model, state: &State| Reading {
-            displacement: crosshead.displacement(state.time),
-            force: reaction_along(state, &top, &Vector3::y()),
-            shear_angle: mean_shear_angle(model, state, &gauge),
-        }))
+        clamped_strip_measurement(model, &self.process, self.gauge_section(model))
     }
 
     fn rows(&self, run: &TestRun) -> Vec<UniaxialRow> {

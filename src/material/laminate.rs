@@ -212,14 +212,51 @@ impl Laminate {
         kin: &MembraneKinematics,
         state: &LaminateState,
     ) -> Result<f64, MaterialError> {
+        self.thickness_mean(kin, state, |law, point| law.wave_modulus(point))
+    }
+
+    /// Thickness-weighted mean of the layers' viscous moduli (MPa·s) in an advanced state:
+    /// with the wave modulus it gives the damping of the element's highest mode.
+    pub fn viscous_modulus(
+        &self,
+        kin: &MembraneKinematics,
+        state: &LaminateState,
+    ) -> Result<f64, MaterialError> {
+        self.thickness_mean(kin, state, |law, point| law.viscous_modulus(point))
+    }
+
+    /// `sum_k t_k f(law_k, point_k) / t0`, each law evaluated once per group of layers.
+    fn thickness_mean(
+        &self,
+        kin: &MembraneKinematics,
+        state: &LaminateState,
+        f: impl Fn(&dyn MaterialLaw, &PointKinematics) -> Result<f64, MaterialError>,
+    ) -> Result<f64, MaterialError> {
         let weighted = self.groups.iter().try_fold(0.0, |sum, group| {
             let k = group[0];
             let point =
                 kin.layer_point(state.thickness_stretch[k], state.thickness_stretch_rate[k]);
             let thickness: f64 = group.iter().map(|&j| self.layers[j].thickness).sum();
-            Ok(sum + thickness * self.layers[k].law.wave_modulus(&point)?)
+            Ok(sum + thickness * f(self.layers[k].law.as_ref(), &point)?)
         })?;
         Ok(weighted / self.reference_thickness())
+    }
+
+    /// Initial in-plane shear modulus (MPa) in the frame of the yarns: the secant of a simple
+    /// shear of 1e-3 rad, `N12 / (t0 gamma)`, rates zero. With the density it gives the slowest
+    /// wave of a sheet at rest, `sqrt(G / rho)`, the speed a quasi-static test must stay far
+    /// below.
+    pub fn shear_modulus(&self, temperature: f64) -> Result<f64, MaterialError> {
+        const GAMMA: f64 = 1e-3;
+        let f = Matrix3x2::new(1.0, GAMMA, 0.0, 1.0, 0.0, 0.0);
+        let kin = MembraneKinematics::from_deformation(
+            &f,
+            &Matrix3x2::zeros(),
+            temperature,
+            FibreDirections::default(),
+        );
+        let response = self.membrane_response(&kin, 0.0, &mut self.initial_state())?;
+        Ok(response.n[(0, 1)] / (self.reference_thickness() * GAMMA))
     }
 
     /// The laminate for a process run `speed_up` times faster (MODEL.md §6): every law

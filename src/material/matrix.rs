@@ -115,11 +115,21 @@ impl MaterialLaw for ViscoHyperelasticMatrix {
     }
 
     /// Plane-stress incompressible neo-Hookean: biaxial modulus `4 mu = 8 C10` at small strain,
-    /// growing roughly with `I1/3`; doubled for safety. The viscous term is left out: at forming
-    /// rates its damping is far below what would shorten the step.
+    /// growing roughly with `I1/3`; doubled for safety. The viscous term has its own bound,
+    /// [`MaterialLaw::viscous_modulus`].
     fn wave_modulus(&self, point: &PointKinematics) -> Result<f64, MaterialError> {
         let c10 = self.c10.at(point.temperature)?;
         Ok(16.0 * c10 * (point.c.trace() / 3.0).max(1.0))
+    }
+
+    /// seed Eq. (9) with `Cdot = 2 Edot`: `S_v = 4 eta1 (I1 - 3) Edot`, a 3D viscosity of
+    /// `eta' = 4 eta1 |I1 - 3|` (its sign, negative for `I1 < 3`, does not matter for the step).
+    /// In plane stress the nearly incompressible melt thins as it stretches,
+    /// `Edot33 = -(Edot11 + Edot22)`, and the in-plane viscosity is
+    /// `eta' [[2, 1], [1, 2]]`: three times `eta'` for equibiaxial stretching.
+    fn viscous_modulus(&self, point: &PointKinematics) -> Result<f64, MaterialError> {
+        let eta1 = self.eta1.at(point.temperature)?;
+        Ok(3.0 * 4.0 * eta1 * (point.c.trace() - 3.0).abs())
     }
 
     /// MODEL.md §6: `eta1 / s`, so the viscous stress at `s` times the rate is unchanged.

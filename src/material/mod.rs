@@ -126,6 +126,13 @@ pub trait MaterialLaw: Debug + Send + Sync {
     /// area), for the stable time step of explicit dynamics: wave speed `sqrt(modulus / rho)`.
     fn wave_modulus(&self, point: &PointKinematics) -> Result<f64, MaterialError>;
 
+    /// An upper bound of the tangent viscosity `|dS/dEdot|` at this point (MPa·s), for the
+    /// stable time step: a viscous stress damps the highest mode of an element and shortens
+    /// the step of central differences. Zero for purely elastic laws.
+    fn viscous_modulus(&self, _point: &PointKinematics) -> Result<f64, MaterialError> {
+        Ok(0.0)
+    }
+
     /// This law for a process run `speed_up` times faster than the real one (MODEL.md §6,
     /// time scaling): rate-dependent parameters change so that the response at the scaled
     /// rate equals the real response at the real rate.

@@ -7,8 +7,9 @@ use super::MaterialError;
 /// Iterations before giving up; Newton from the previous step's stretch needs 2–4.
 pub const MAX_ITERATIONS: usize = 60;
 
-/// Relative step of the finite-difference slope.
+/// Relative step of the finite-difference slope at the first iterate, and its floor later on.
 const SLOPE_STEP: f64 = 1e-7;
+const SLOPE_STEP_FLOOR: f64 = 1e-11;
 
 /// Newton steps smaller than this fraction of the stretch end the iteration.
 const STEP_RESOLUTION: f64 = 1e-14;
@@ -34,8 +35,12 @@ pub struct StressSample {
 ///
 /// `stress` must increase with the stretch near the root, as any stable material's
 /// through-thickness stress does. It is converged when `|value| <= tolerance * scale` or when
-/// the Newton step falls below 1e-14 of the stretch. Newton steps with a finite-difference slope are kept
-/// inside a bracket of the root once one is known, and replaced by bisection when they leave it.
+/// the Newton step falls below 1e-14 of the stretch. Newton steps with a finite-difference slope
+/// are kept inside a bracket of the root once one is known, and replaced by bisection when they
+/// leave it. The difference step follows the last Newton step down (to 1e-11 of the stretch):
+/// a fixed step biases the slope by `h S''/2`, which for a strongly curved stress (a viscous
+/// melt whose thickness rate is `(lambda - lambda_prev) / dt` on a short step) stalls Newton
+/// into slow linear convergence.
 pub fn find_stress_free_stretch(
     mut stress: impl FnMut(f64) -> Result<StressSample, MaterialError>,
     guess: f64,
@@ -49,6 +54,7 @@ pub fn find_stress_free_stretch(
     let mut below = 0.0_f64; // largest stretch known to give stress < 0
     let mut above = f64::INFINITY; // smallest stretch known to give stress > 0
     let mut residual = f64::NAN;
+    let mut h = SLOPE_STEP * lambda;
     for iteration in 0..MAX_ITERATIONS {
         let sample = stress(lambda)?;
         residual = sample.value;
@@ -67,13 +73,19 @@ pub fn find_stress_free_stretch(
         } else {
             above = above.min(lambda);
         }
-        let h = SLOPE_STEP * lambda;
+        if above - below <= STEP_RESOLUTION * lambda {
+            // the root is bracketed to the resolution of lambda
+            return Ok(Ok(lambda));
+        }
         let slope = (stress(lambda + h)?.value - residual) / h;
         let newton = lambda - residual / slope;
         // A Newton step below the resolution of lambda: the residual is rounding noise.
         if slope > 0.0 && (newton - lambda).abs() <= STEP_RESOLUTION * lambda {
             return Ok(Ok(lambda));
         }
+        h = (newton - lambda)
+            .abs()
+            .clamp(SLOPE_STEP_FLOOR * lambda, SLOPE_STEP * lambda);
         let inside = |x: f64| x.is_finite() && x > below && x < above;
         lambda = if slope > 0.0 && inside(newton) {
             newton
@@ -113,6 +125,21 @@ mod tests {
         let law = |l: f64| sample((l - 2.0).atan() * 1e3 + 1e-3 * (l - 2.0).powi(3));
         let root = find_stress_free_stretch(law, 0.01, 1e-10).unwrap().unwrap();
         assert!((root - 2.0).abs() < 1e-10, "{root}");
+    }
+
+    #[test]
+    fn converges_on_a_stress_curved_below_the_difference_step() {
+        // S = x (1 + |x| / delta), x = l - r, delta = 1e-10: near the root the slope is 1, but
+        // over a difference step of 1e-7 it looks 1000 times steeper, and Newton with that
+        // slope creeps by 0.1 % a step (the plane-stress S33 of a very viscous melt on a short
+        // step is curved like this: its rate is (lambda - lambda_prev) / dt)
+        let (r, delta) = (0.999_997_8, 1e-10);
+        let law = |l: f64| {
+            let x = l - r;
+            sample(x * (1.0 + x.abs() / delta))
+        };
+        let root = find_stress_free_stretch(law, 1.0, 1e-12).unwrap().unwrap();
+        assert!((root - r).abs() < 1e-12, "{root}");
     }
 
     #[test]

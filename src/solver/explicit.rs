@@ -5,7 +5,9 @@
 //! The viscous matrix sees the rate from `v_{n-1/2}`, half a step behind, as usual in explicit
 //! codes. Constrained nodes get their prescribed velocity at `t_{n+1/2}`; their reaction is
 //! `R = f_int + m a`. The step is `safety x min_e(h_e / c_e)` with `h_e` the smallest altitude
-//! and `c_e = sqrt(E_e / rho_e)` from the laminate's current wave modulus, re-evaluated every step.
+//! and `c_e = sqrt(E_e / rho_e)` from the laminate's current wave modulus, re-evaluated every step,
+//! times `sqrt(1 + xi^2) - xi` for the damping `xi` of the element's highest mode by the yarn
+//! damping and the matrix viscosity (the critical step of a damped oscillator).
 
 use super::energy::Energies;
 use super::model::{Model, Motion};
@@ -526,12 +528,16 @@ fn element_loop(
             let modulus = laminate
                 .wave_modulus(&kin, lam_state)
                 .map_err(|err| (k, err))?;
+            let viscosity = laminate
+                .viscous_modulus(&kin, lam_state)
+                .map_err(|err| (k, err))?;
             *membrane = response;
             let element_step = e.altitude * (densities[k] / modulus).sqrt();
             let (n_damping, power) =
                 yarn_damping_resultant(&kin, xi, element_step, modulus, thickness);
             result.forces = e.internal_forces(&f, &(response.n + n_damping));
-            result.stable_step = element_step * step_reduction(xi);
+            let xi_total = xi + material_damping_ratio(viscosity, modulus, element_step);
+            result.stable_step = element_step * step_reduction(xi_total);
             result.damping_power = power * e.area;
             Ok((result.stable_step, result.damping_power))
         })
@@ -539,4 +545,11 @@ fn element_loop(
             || (f64::INFINITY, 0.0),
             |a, b| Ok((a.0.min(b.0), a.1 + b.1)),
         )
+}
+
+/// Fraction of critical damping that a material viscosity `eta` (MPa·s) gives the highest mode
+/// of an element, `omega = 2 / dt_e`: `xi = eta omega / (2 E) = eta / (E dt_e)`. Heavily
+/// viscous melts on fine meshes are limited by it, not by the wave speed.
+fn material_damping_ratio(eta: f64, modulus: f64, element_step: f64) -> f64 {
+    eta / (modulus * element_step)
 }
