@@ -1,0 +1,100 @@
+//! Rigid tool surfaces: triangulated, with outward normals facing the blank.
+
+use nalgebra::Vector3;
+
+/// A triangulated rigid surface in its own frame (mm). Triangles are counter-clockwise seen
+/// from the side the blank is on, so `(b - a) x (c - a)` points towards the blank.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TriangleSurface {
+    pub vertices: Vec<Vector3<f64>>,
+    pub triangles: Vec<[usize; 3]>,
+}
+
+/// The point of a surface nearest to a query point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Projection {
+    /// Index of the triangle that holds the nearest point.
+    pub triangle: usize,
+    /// The nearest point.
+    pub point: Vector3<f64>,
+    /// Unit normal of that triangle, towards the blank's side.
+    pub normal: Vector3<f64>,
+}
+
+impl TriangleSurface {
+    /// Unit normal of triangle `k`, towards the blank's side.
+    pub fn normal(&self, k: usize) -> Vector3<f64> {
+        let [a, b, c] = self.triangles[k].map(|i| self.vertices[i]);
+        (b - a).cross(&(c - a)).normalize()
+    }
+
+    /// Smallest and largest corner of the axis-aligned box around the surface.
+    pub fn bounds(&self) -> (Vector3<f64>, Vector3<f64>) {
+        let mut lo = Vector3::repeat(f64::INFINITY);
+        let mut hi = Vector3::repeat(f64::NEG_INFINITY);
+        for v in &self.vertices {
+            lo = lo.inf(v);
+            hi = hi.sup(v);
+        }
+        (lo, hi)
+    }
+}
+
+/// Nearest point of triangle `(a, b, c)` to `p` (Ericson, Real-Time Collision Detection, 5.1.5).
+pub fn closest_point_on_triangle(
+    p: &Vector3<f64>,
+    a: &Vector3<f64>,
+    b: &Vector3<f64>,
+    c: &Vector3<f64>,
+) -> Vector3<f64> {
+    let ab = b - a;
+    let ac = c - a;
+    let ap = p - a;
+    let d1 = ab.dot(&ap);
+    let d2 = ac.dot(&ap);
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return *a;
+    }
+    let bp = p - b;
+    let d3 = ab.dot(&bp);
+    let d4 = ac.dot(&bp);
+    if d3 >= 0.0 && d4 <= d3 {
+        return *b;
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        return a + ab * (d1 / (d1 - d3));
+    }
+    let cp = p - c;
+    let d5 = ab.dot(&cp);
+    let d6 = ac.dot(&cp);
+    if d6 >= 0.0 && d5 <= d6 {
+        return *c;
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        return a + ac * (d2 / (d2 - d6));
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+    }
+    let denom = 1.0 / (va + vb + vc);
+    a + ab * (vb * denom) + ac * (vc * denom)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn closest_point_regions_of_a_triangle() {
+        let (a, b, c) = (Vector3::zeros(), Vector3::x(), Vector3::y());
+        let inside = closest_point_on_triangle(&Vector3::new(0.2, 0.3, 5.0), &a, &b, &c);
+        assert!((inside - Vector3::new(0.2, 0.3, 0.0)).norm() < 1e-15);
+        let corner = closest_point_on_triangle(&Vector3::new(-1.0, -1.0, 1.0), &a, &b, &c);
+        assert!(corner.norm() < 1e-15);
+        let edge = closest_point_on_triangle(&Vector3::new(1.0, 1.0, 0.0), &a, &b, &c);
+        assert!((edge - Vector3::new(0.5, 0.5, 0.0)).norm() < 1e-15);
+    }
+}
