@@ -6,11 +6,13 @@
 //! - [`material`]: constitutive laws of the layers and the A:B:A laminate, material cards;
 //! - [`experiment`]: virtual material tests, starting with the material-point driver;
 //! - [`contact`]: rigid tools (triangulated surfaces) and their contact with the blank;
+//! - [`drape`]: kinematic (pin-jointed net) draping, a quick shear preview before forming;
 //! - [`io`]: readers and writers of the files users hand in and get back;
 //! - [`cli`]: the `thermostamp` command line.
 
 pub mod cli;
 pub mod contact;
+pub mod drape;
 pub mod element;
 pub mod experiment;
 pub mod io;

@@ -1,6 +1,12 @@
 //! Rigid tools and their contact with the blank (MODEL.md §6): triangulated surfaces, the
 //! standard tool shapes, and penalty contact with Coulomb friction.
 
+pub mod stl;
 pub mod surface;
+pub mod tools;
 
+pub use stl::{parse_stl, read_stl, write_stl_ascii, write_stl_binary, StlError};
 pub use surface::{closest_point_on_triangle, Projection, TriangleSurface};
+pub use tools::{
+    blank_holder, double_dome_punch, hemisphere_die, hemisphere_punch, hemisphere_punch_with_skirt,
+};

@@ -4,6 +4,7 @@
 
 use super::fabric::{ShearInteraction, YarnTension};
 use super::{Laminate, Layer, MaterialLaw, TemperatureTable, ViscoHyperelasticMatrix, WovenFabric};
+use crate::element::BendingRigidity;
 use serde::Deserialize;
 use std::path::Path;
 use std::sync::Arc;
@@ -18,6 +19,8 @@ pub struct MaterialCard {
     pub matrix: Option<Arc<ViscoHyperelasticMatrix>>,
     pub fabric: Arc<WovenFabric>,
     pub laminate: Laminate,
+    /// Bending rigidity of the ply per unit width (MODEL.md §4); absent: a membrane.
+    pub bending: Option<BendingRigidity>,
 }
 
 /// What is wrong with a material card, and in which file.
@@ -36,6 +39,16 @@ struct CardFile {
     layers: LayersSection,
     matrix: Option<MatrixSection>,
     fabric: FabricSection,
+    bending: Option<BendingSection>,
+}
+
+/// `[bending]`: rigidities per unit width (N·mm) for curvature along warp and weft, as from
+/// cantilever (Peirce) tests of the prepreg at the forming temperature.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct BendingSection {
+    warp: f64,
+    weft: f64,
 }
 
 #[derive(Deserialize)]
@@ -152,12 +165,26 @@ impl CardFile {
             .map(Arc::new);
         let fabric = Arc::new(self.fabric.check()?);
         let laminate = self.layers.check(matrix.clone(), fabric.clone())?;
+        let bending = self
+            .bending
+            .map(|b| {
+                let rigidity = BendingRigidity {
+                    warp: b.warp,
+                    weft: b.weft,
+                };
+                rigidity
+                    .validate()
+                    .map(|()| rigidity)
+                    .map_err(|e| format!("[bending] {e}"))
+            })
+            .transpose()?;
         Ok(MaterialCard {
             name: self.name,
             density,
             matrix,
             fabric,
             laminate,
+            bending,
         })
     }
 }
@@ -377,6 +404,27 @@ shear = [0.25, 0.0, 2.0]
             let e = error_of(&VALID.replace(from, to));
             assert!(e.contains(expected), "{to}: {e}");
         }
+    }
+
+    #[test]
+    fn bending_section_is_optional_and_checked() {
+        assert!(MaterialCard::from_toml(VALID, "card.toml")
+            .unwrap()
+            .bending
+            .is_none());
+        let with = format!("{VALID}\n[bending]\nwarp = 2.0\nweft = 0.5\n");
+        let card = MaterialCard::from_toml(&with, "card.toml").unwrap();
+        assert_eq!(
+            card.bending,
+            Some(BendingRigidity {
+                warp: 2.0,
+                weft: 0.5
+            })
+        );
+        let negative = with.replace("weft = 0.5", "weft = -0.5");
+        assert!(error_of(&negative).contains("[bending] bending rigidity weft"));
+        let unknown = with.replace("weft = 0.5", "weft = 0.5\ntwist = 1.0");
+        assert!(error_of(&unknown).contains("twist"));
     }
 
     #[test]

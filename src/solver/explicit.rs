@@ -12,6 +12,7 @@
 use super::energy::Energies;
 use super::model::{Model, Motion};
 use super::yarn_damping::{step_reduction, yarn_damping_resultant};
+use crate::element::Bending;
 use crate::material::{LaminateState, MaterialError, MembraneKinematics, MembraneResponse};
 use nalgebra::{Matrix2, Vector3};
 use rayon::prelude::*;
@@ -105,17 +106,19 @@ struct ElementResult {
     damping_power: f64,
 }
 
-/// Elements around each node, for a race-free parallel gather of nodal forces.
+/// Elements (or bending patches) around each node, for a race-free parallel gather of nodal
+/// forces: entries `(item, place of the node in the item)`.
 struct NodeElements {
     start: Vec<usize>,
     entries: Vec<(usize, usize)>,
 }
 
 impl NodeElements {
-    fn new(model: &Model) -> Self {
-        let mut count = vec![0usize; model.mesh.nodes.len() + 1];
-        for e in &model.elements {
-            for &n in &e.nodes {
+    /// From the node lists of the items on `nodes` nodes.
+    fn new<'a>(nodes: usize, items: impl Iterator<Item = &'a [usize]> + Clone) -> Self {
+        let mut count = vec![0usize; nodes + 1];
+        for item in items.clone() {
+            for &n in item {
                 count[n + 1] += 1;
             }
         }
@@ -124,8 +127,8 @@ impl NodeElements {
         }
         let mut fill = count.clone();
         let mut entries = vec![(0, 0); count[count.len() - 1]];
-        for (k, e) in model.elements.iter().enumerate() {
-            for (local, &n) in e.nodes.iter().enumerate() {
+        for (k, item) in items.enumerate() {
+            for (local, &n) in item.iter().enumerate() {
                 entries[fill[n]] = (k, local);
                 fill[n] += 1;
             }
@@ -286,21 +289,30 @@ fn advance(
     state.energies.damping += damping_work;
 }
 
-/// `f_int` at each node: the sum of its elements' contributions, gathered node by node so
-/// that threads never write to the same place.
-fn gather_forces(adjacency: &NodeElements, results: &[ElementResult], forces: &mut [Vector3<f64>]) {
-    forces.par_iter_mut().enumerate().for_each(|(node, f)| {
-        *f = adjacency
+/// `f_int` at each node: the sum of its elements' and hinges' contributions, gathered node by
+/// node so that threads never write to the same place.
+fn gather_forces(forces: &InternalForces, nodal: &mut [Vector3<f64>]) {
+    nodal.par_iter_mut().enumerate().for_each(|(node, f)| {
+        let membrane: Vector3<f64> = forces
+            .adjacency
             .of(node)
             .iter()
-            .map(|&(e, local)| results[e].forces[local])
+            .map(|&(e, local)| forces.results[e].forces[local])
             .sum();
+        let bending: Vector3<f64> = forces
+            .patch_adjacency
+            .of(node)
+            .iter()
+            .map(|&(t, local)| forces.patch_forces[forces.patch_offsets[t] + local])
+            .sum();
+        *f = membrane + bending;
     });
 }
 
-/// Elastic energy stored in the sheet, `sum_e A0 sum_k t_k W_k`.
+/// Elastic energy stored in the sheet, `sum_e A0 sum_k t_k W_k` plus the hinges' bending
+/// energy.
 fn elastic_energy(model: &Model, state: &State) -> Result<f64, (usize, MaterialError)> {
-    model
+    let membrane = model
         .elements
         .par_iter()
         .enumerate()
@@ -314,7 +326,14 @@ fn elastic_energy(model: &Model, state: &State) -> Result<f64, (usize, MaterialE
                 .map_err(|err| (k, err))?;
             Ok(e.area * w)
         })
-        .try_reduce(|| 0.0, |a, b| Ok(a + b))
+        .try_reduce(|| 0.0, |a, b| Ok(a + b))?;
+    let bending: f64 = model.bending.as_ref().map_or(0.0, |b| {
+        b.triangles
+            .par_iter()
+            .map(|t| b.energy(t, &state.positions))
+            .sum()
+    });
+    Ok(membrane + bending)
 }
 
 /// An explicit run that goes unstable creates energy from nothing: the balance error grows
@@ -411,13 +430,26 @@ fn prescribed_motion(model: &Model) -> Vec<Option<&Motion>> {
 pub struct InternalForces {
     adjacency: NodeElements,
     results: Vec<ElementResult>,
+    patch_adjacency: NodeElements,
+    /// Bending forces of every patch node, patch after patch, from `patch_offsets`.
+    patch_forces: Vec<Vector3<f64>>,
+    patch_offsets: Vec<usize>,
 }
 
 impl InternalForces {
     pub fn new(model: &Model) -> Self {
+        let nodes = model.mesh.nodes.len();
+        let patches = model.bending.as_ref().map_or(&[][..], |b| &b.triangles[..]);
+        let mut patch_offsets = vec![0];
+        for t in patches {
+            patch_offsets.push(patch_offsets[patch_offsets.len() - 1] + t.nodes.len());
+        }
         Self {
-            adjacency: NodeElements::new(model),
+            adjacency: NodeElements::new(nodes, model.elements.iter().map(|e| &e.nodes[..])),
             results: vec![ElementResult::default(); model.elements.len()],
+            patch_adjacency: NodeElements::new(nodes, patches.iter().map(|t| &t.nodes[..])),
+            patch_forces: vec![Vector3::zeros(); patch_offsets[patch_offsets.len() - 1]],
+            patch_offsets,
         }
     }
 
@@ -431,11 +463,69 @@ impl InternalForces {
         dt: f64,
         yarn_damping: f64,
     ) -> Result<(f64, f64), SolverError> {
-        let out = element_loop(model, state, &mut self.results, (dt, yarn_damping))
-            .map_err(|(element, e)| unstable(state, element, e.to_string()))?;
-        gather_forces(&self.adjacency, &self.results, &mut state.internal_forces);
-        Ok(out)
+        let (membrane_step, power) =
+            element_loop(model, state, &mut self.results, (dt, yarn_damping))
+                .map_err(|(element, e)| unstable(state, element, e.to_string()))?;
+        let bending_step = match &model.bending {
+            Some(bending) => bending_loop(
+                model,
+                bending,
+                state,
+                &mut self.patch_forces,
+                &self.patch_offsets,
+            ),
+            None => f64::INFINITY,
+        };
+        gather_forces(self, &mut state.internal_forces);
+        Ok((membrane_step.min(bending_step), power))
     }
+}
+
+/// Bending forces of every patch at the current positions (in parallel), and the smallest
+/// stable step of the bending modes on the current element densities.
+fn bending_loop(
+    model: &Model,
+    bending: &Bending,
+    state: &State,
+    forces: &mut [Vector3<f64>],
+    offsets: &[usize],
+) -> f64 {
+    let thickness = model.laminate.reference_thickness();
+    split_at_offsets(forces, offsets)
+        .into_par_iter()
+        .zip(bending.triangles.par_iter())
+        .zip(state.densities.par_iter())
+        .map(|((f, t), rho)| {
+            bending.forces(t, &state.positions, f);
+            bending.stable_step(t, rho * thickness)
+        })
+        .reduce(|| f64::INFINITY, f64::min)
+}
+
+/// `forces` cut into the consecutive pieces that `offsets` (starts, and the end) delimit.
+fn split_at_offsets<'a>(
+    mut forces: &'a mut [Vector3<f64>],
+    offsets: &[usize],
+) -> Vec<&'a mut [Vector3<f64>]> {
+    offsets
+        .windows(2)
+        .map(|w| {
+            let (piece, rest) = std::mem::take(&mut forces).split_at_mut(w[1] - w[0]);
+            forces = rest;
+            piece
+        })
+        .collect()
+}
+
+/// Stable step of the bending modes of each triangle on its density.
+fn bending_steps(model: &Model, bending: &Bending, densities: &[f64]) -> Vec<f64> {
+    let thickness = model.laminate.reference_thickness();
+    bending
+        .triangles
+        .iter()
+        .zip(densities)
+        .map(|(t, rho)| bending.stable_step(t, rho * thickness))
+        .collect()
 }
 
 impl State {
@@ -446,12 +536,23 @@ impl State {
         let thickness = laminate.reference_thickness();
         let mut densities = vec![model.density; model.elements.len()];
         let mut added_mass = 0.0;
+        let mut steps = Vec::with_capacity(model.elements.len());
         for (k, e) in model.elements.iter().enumerate() {
             let kin = rest_kinematics(model, k);
             let modulus = laminate
                 .wave_modulus(&kin, &laminate.initial_state())
                 .map_err(|err| SolverError::Settings(format!("element {k}: {err}")))?;
-            let step = e.altitude * (model.density / modulus).sqrt();
+            steps.push(e.altitude * (model.density / modulus).sqrt());
+        }
+        if let Some(bending) = &model.bending {
+            for (step, bending_step) in steps
+                .iter_mut()
+                .zip(bending_steps(model, bending, &densities))
+            {
+                *step = step.min(bending_step);
+            }
+        }
+        for ((k, e), &step) in model.elements.iter().enumerate().zip(&steps) {
             if let Some(target) = settings.target_time_step {
                 if step < target {
                     densities[k] = model.density * (target / step).powi(2);

@@ -1,7 +1,8 @@
 //! What the solver integrates: the meshed sheet, its laminate, and the constraints.
 
+use crate::element::bending_triangle::BendingError;
 use crate::element::membrane_triangle::ElementError;
-use crate::element::MembraneTriangle;
+use crate::element::{Bending, BendingRigidity, MembraneTriangle};
 use crate::material::Laminate;
 use crate::mesh::{Mesh, MeshError};
 use nalgebra::Vector3;
@@ -41,6 +42,8 @@ pub struct Constraint {
 pub struct Model {
     pub mesh: Mesh,
     pub elements: Vec<MembraneTriangle>,
+    /// Bending stiffness; `None` for a membrane.
+    pub bending: Option<Bending>,
     pub laminate: Laminate,
     /// Density of the ply (tonne/mm^3).
     pub density: f64,
@@ -72,6 +75,8 @@ pub enum ModelError {
     OrphanNode(usize),
     #[error("density {0} must be > 0")]
     Density(f64),
+    #[error("bending: {0}")]
+    Bending(#[from] BendingError),
 }
 
 impl Model {
@@ -129,10 +134,18 @@ impl Model {
         Ok(Self {
             mesh,
             elements,
+            bending: None,
             laminate,
             density,
             temperature,
             constraints,
         })
+    }
+
+    /// The same sheet with bending stiffness: a rotation-free bending patch per triangle
+    /// (MODEL.md §4, `element::bending_triangle`), the reference mesh's curvature at rest.
+    pub fn with_bending(mut self, rigidity: BendingRigidity) -> Result<Self, ModelError> {
+        self.bending = Some(Bending::new(&self.mesh, &self.elements, rigidity)?);
+        Ok(self)
     }
 }

@@ -1,0 +1,488 @@
+//! The standard rigid tools of a hemispherical (and double-dome) thermo-stamping set-up, as
+//! triangulated surfaces oriented towards the blank.
+//!
+//! # Conventions
+//!
+//! - The stroke axis is `z`. The blank lies initially in the plane `z = 0`, centred on the axis.
+//! - The **punch** is below the blank (`z <= 0`) and moves up (`+z`); its apex touches `z = 0`.
+//! - The **die** is above the blank (`z >= 0`): its flat underside lies in `z = 0` and its hole
+//!   goes up, so the punch pushes the blank into it.
+//! - The **blank holder** is below the blank, around the punch: a flat annulus in `z = 0`.
+//! - Every surface is placed touching the blank's *mid-plane*; the forming driver translates the
+//!   tools by half the blank thickness (and the clearance) before a run.
+//! - As everywhere in [`super::surface`], triangles are counter-clockwise seen from the blank, so
+//!   the normal `(b - a) x (c - a)` points towards the blank: up and outward on the punch, down
+//!   and into the hole on the die, up on the blank holder. Surfaces are open (no bottom or top
+//!   lids): only the side the blank can touch is meshed.
+//!
+//! # Meshes
+//!
+//! Every tool is a *profile* `(r, z)` in a meridian half-plane swept around the axis (or, for the
+//! double dome, around a segment of the `x` axis). Each profile point becomes a ring of vertices;
+//! neighbouring rings are stitched into triangles by walking both rings in angle order, so rings
+//! may have different numbers of vertices (the number follows the ring's circumference). The
+//! target edge length is `resolution` (mm), both along the profile and around the rings, with two
+//! [choice]s to keep coarse meshes round: a circular arc is cut into steps of at most 15°, and a
+//! full ring has at least 12 segments.
+//!
+//! Every vertex lies exactly (to rounding) on the analytic surface, so the faceting error in
+//! area and volume is second order in `resolution`.
+
+use super::surface::TriangleSurface;
+use nalgebra::Vector3;
+use std::f64::consts::{FRAC_PI_2, PI};
+
+/// Largest angle (rad) of one step along a circular arc of the profile: 15°.
+const MAX_ARC_STEP: f64 = PI / 12.0;
+/// Fewest segments on a half ring (a full circle gets at least twice this).
+const MIN_HALF_RING_SEGMENTS: usize = 6;
+/// Most segments on one piece of profile or ring: a guard against absurd `resolution`s.
+const MAX_SEGMENTS: f64 = 1.0e6;
+/// Most vertices of one tool: a guard against running out of memory.
+const MAX_VERTICES: f64 = 5.0e6;
+/// Ring parameter period: the four pieces of a ring (right half circle, top straight, left half
+/// circle, bottom straight) each span one unit.
+const RING_PERIOD: f64 = 4.0;
+
+/// Hemispherical punch of radius `radius` with a vertical cylindrical skirt of height `radius`
+/// below the equator, so the punch reaches from `z = -2 radius` up to its apex at the origin.
+///
+/// The skirt height is a [choice]: a stroke deeper than the punch radius draws the blank along
+/// the cylinder, and a skirt as tall as the radius covers any stroke a hemispherical die allows.
+/// Use [`hemisphere_punch_with_skirt`] for another height.
+pub fn hemisphere_punch(radius: f64, resolution: f64) -> Result<TriangleSurface, String> {
+    hemisphere_punch_with_skirt(radius, radius, resolution)
+}
+
+/// Hemispherical punch: the cap `|x - c| = radius`, `z >= -radius`, with centre
+/// `c = (0, 0, -radius)` (apex at the origin), continued below its equator by a vertical cylinder
+/// of radius `radius` down to `z = -radius - skirt_height`. `skirt_height = 0` gives the bare cap.
+/// Normals point outward, away from the centre, towards the blank.
+pub fn hemisphere_punch_with_skirt(
+    radius: f64,
+    skirt_height: f64,
+    resolution: f64,
+) -> Result<TriangleSurface, String> {
+    const TOOL: &str = "hemisphere_punch";
+    check_positive(TOOL, "radius", radius)?;
+    check_non_negative(TOOL, "skirt_height", skirt_height)?;
+    check_positive(TOOL, "resolution", resolution)?;
+    let profile = punch_profile(radius, skirt_height, resolution)?;
+    sweep(TOOL, &profile, 0.0, resolution)
+}
+
+/// Die of a hemispherical set-up: a flat annular plate in `z = 0` (normal down, towards the
+/// blank) from `outer_radius` in to `opening_radius + fillet_radius`, a torus fillet of radius
+/// `fillet_radius` (centre circle at `r = opening_radius + fillet_radius`, `z = fillet_radius`)
+/// turning through 90° into a vertical cylindrical hole wall of radius `opening_radius` that goes
+/// up to `z = depth`. Normals point down on the plate and into the hole on the fillet and wall.
+///
+/// The fillet is tangent to the plate and to the wall, so the surface is C1 (tangent-continuous).
+pub fn hemisphere_die(
+    opening_radius: f64,
+    fillet_radius: f64,
+    outer_radius: f64,
+    depth: f64,
+    resolution: f64,
+) -> Result<TriangleSurface, String> {
+    const TOOL: &str = "hemisphere_die";
+    check_positive(TOOL, "opening_radius", opening_radius)?;
+    check_positive(TOOL, "fillet_radius", fillet_radius)?;
+    check_positive(TOOL, "outer_radius", outer_radius)?;
+    check_positive(TOOL, "depth", depth)?;
+    check_positive(TOOL, "resolution", resolution)?;
+    if fillet_radius >= opening_radius {
+        return Err(format!(
+            "{TOOL}: fillet_radius ({fillet_radius}) must be smaller than opening_radius \
+             ({opening_radius})"
+        ));
+    }
+    if outer_radius <= opening_radius + fillet_radius {
+        return Err(format!(
+            "{TOOL}: outer_radius ({outer_radius}) must exceed opening_radius + fillet_radius \
+             ({})",
+            opening_radius + fillet_radius
+        ));
+    }
+    if depth <= fillet_radius {
+        return Err(format!(
+            "{TOOL}: depth ({depth}) must exceed fillet_radius ({fillet_radius}) so the hole has a \
+             wall above the fillet"
+        ));
+    }
+    let profile = die_profile(
+        opening_radius,
+        fillet_radius,
+        outer_radius,
+        depth,
+        resolution,
+    )?;
+    sweep(TOOL, &profile, 0.0, resolution)
+}
+
+/// Blank holder: the flat annulus `inner_radius <= r <= outer_radius` in `z = 0`, below the
+/// blank, with normal `+z`. Its inner radius must clear the punch (not checked here: the tools
+/// are independent).
+pub fn blank_holder(
+    inner_radius: f64,
+    outer_radius: f64,
+    resolution: f64,
+) -> Result<TriangleSurface, String> {
+    const TOOL: &str = "blank_holder";
+    check_positive(TOOL, "inner_radius", inner_radius)?;
+    check_positive(TOOL, "outer_radius", outer_radius)?;
+    check_positive(TOOL, "resolution", resolution)?;
+    if outer_radius <= inner_radius {
+        return Err(format!(
+            "{TOOL}: outer_radius ({outer_radius}) must exceed inner_radius ({inner_radius})"
+        ));
+    }
+    // Profile outward: its left normal (-z', r') is then +z (see `sweep`).
+    let mut profile = Profile::start(inner_radius, 0.0);
+    profile.line_to(outer_radius, 0.0, resolution)?;
+    sweep(TOOL, &profile.points, 0.0, resolution)
+}
+
+/// Double-dome punch, a [choice] simplifying the woven-composites "double dome" benchmark to a
+/// smooth shape of double curvature: the hemisphere punch stretched along `x`. Its crown is the
+/// set of points at distance `radius` above the ridge segment `|x| <= half_length`, `y = 0`,
+/// `z = -radius`: a half cylinder of radius `radius` along `x` in the middle, closed by two
+/// quarter spheres at `x = ±half_length`; below the crown's "equator" (`z = -radius`) a vertical
+/// skirt of height `skirt_height` follows the stadium-shaped outline.
+///
+/// The surface is the offset of a segment, hence C1: cylinder and spheres meet tangentially at
+/// `x = ±half_length`. `half_length = 0` gives [`hemisphere_punch_with_skirt`]. Normals point
+/// away from the ridge, towards the blank.
+pub fn double_dome_punch(
+    half_length: f64,
+    radius: f64,
+    skirt_height: f64,
+    resolution: f64,
+) -> Result<TriangleSurface, String> {
+    const TOOL: &str = "double_dome_punch";
+    check_non_negative(TOOL, "half_length", half_length)?;
+    check_positive(TOOL, "radius", radius)?;
+    check_non_negative(TOOL, "skirt_height", skirt_height)?;
+    check_positive(TOOL, "resolution", resolution)?;
+    let profile = punch_profile(radius, skirt_height, resolution)?;
+    sweep(TOOL, &profile, half_length, resolution)
+}
+
+fn check_positive(tool: &str, name: &str, value: f64) -> Result<(), String> {
+    if value.is_finite() && value > 0.0 {
+        Ok(())
+    } else {
+        Err(format!(
+            "{tool}: {name} must be positive and finite, got {value}"
+        ))
+    }
+}
+
+fn check_non_negative(tool: &str, name: &str, value: f64) -> Result<(), String> {
+    if value.is_finite() && value >= 0.0 {
+        Ok(())
+    } else {
+        Err(format!(
+            "{tool}: {name} must be zero or positive and finite, got {value}"
+        ))
+    }
+}
+
+/// Punch profile from the apex down: quarter circle `r = R cos a`, `z = -R + R sin a` for `a`
+/// from 90° to 0°, then the skirt straight down. Going down and outward puts the profile's left
+/// normal outward, towards the blank.
+fn punch_profile(radius: f64, skirt_height: f64, h: f64) -> Result<Vec<[f64; 2]>, String> {
+    let mut profile = Profile::start(0.0, 0.0);
+    profile.arc_to([0.0, -radius], radius, FRAC_PI_2, 0.0, [radius, -radius], h)?;
+    if skirt_height > 0.0 {
+        profile.line_to(radius, -radius - skirt_height, h)?;
+    }
+    Ok(profile.points)
+}
+
+/// Die profile from the outer rim inward: the plate along `z = 0`, the fillet (angle `a` from
+/// -90° to -180° about its centre, point `c + Rf (cos a, sin a)`), then the wall up. Going inward
+/// puts the left normal down on the plate and towards the axis on the wall.
+fn die_profile(
+    opening: f64,
+    fillet: f64,
+    outer: f64,
+    depth: f64,
+    h: f64,
+) -> Result<Vec<[f64; 2]>, String> {
+    let centre = [opening + fillet, fillet];
+    let mut profile = Profile::start(outer, 0.0);
+    profile.line_to(centre[0], 0.0, h)?;
+    profile.arc_to(centre, fillet, -FRAC_PI_2, -PI, [opening, fillet], h)?;
+    profile.line_to(opening, depth, h)?;
+    Ok(profile.points)
+}
+
+/// A polyline in the meridian half-plane `(r, z)`, `r >= 0`, sampled at about the target edge
+/// length. Each sampled piece ends on its exact end point, so pieces join without gaps.
+struct Profile {
+    points: Vec<[f64; 2]>,
+}
+
+impl Profile {
+    fn start(r: f64, z: f64) -> Self {
+        Profile {
+            points: vec![[r, z]],
+        }
+    }
+
+    fn last(&self) -> [f64; 2] {
+        self.points[self.points.len() - 1]
+    }
+
+    /// Straight line from the last point to `(r, z)` in equal steps of at most `h`.
+    fn line_to(&mut self, r: f64, z: f64, h: f64) -> Result<(), String> {
+        let [r0, z0] = self.last();
+        let n = segments((r - r0).hypot(z - z0) / h)?;
+        for k in 1..n {
+            let f = k as f64 / n as f64;
+            self.points.push([r0 + f * (r - r0), z0 + f * (z - z0)]);
+        }
+        self.points.push([r, z]);
+        Ok(())
+    }
+
+    /// Circular arc about `centre` from angle `from` (the last point) to angle `to` (the point
+    /// `end`, given exactly), in equal steps of at most `h` and at most [`MAX_ARC_STEP`].
+    fn arc_to(
+        &mut self,
+        centre: [f64; 2],
+        radius: f64,
+        from: f64,
+        to: f64,
+        end: [f64; 2],
+        h: f64,
+    ) -> Result<(), String> {
+        let sweep = (to - from).abs();
+        let n = segments(radius * sweep / h)?.max(segments(sweep / MAX_ARC_STEP)?);
+        for k in 1..n {
+            let a = from + (to - from) * k as f64 / n as f64;
+            self.points
+                .push([centre[0] + radius * a.cos(), centre[1] + radius * a.sin()]);
+        }
+        self.points.push(end);
+        Ok(())
+    }
+}
+
+/// Number of segments `ceil(ratio)` (at least 1) of a piece `ratio` target lengths long, or an
+/// error when the resolution is absurdly fine for the tool.
+fn segments(ratio: f64) -> Result<usize, String> {
+    if ratio > MAX_SEGMENTS {
+        return Err(format!(
+            "resolution is too fine: {ratio:.3e} segments on one piece (limit {MAX_SEGMENTS:e})"
+        ));
+    }
+    Ok((ratio.ceil() as usize).max(1))
+}
+
+/// Segments of a half ring of radius `r` (r > 0).
+fn half_ring_segments(r: f64, h: f64) -> Result<usize, String> {
+    Ok(segments(PI * r / h)?.max(MIN_HALF_RING_SEGMENTS))
+}
+
+/// Segments of each straight side of a stadium ring of half-length `l` (0 when `l = 0`).
+fn straight_segments(l: f64, h: f64) -> Result<usize, String> {
+    if l == 0.0 {
+        Ok(0)
+    } else {
+        segments(2.0 * l / h)
+    }
+}
+
+/// A closed ring of vertices (indices may repeat where the ring collapses onto the axis), with a
+/// parameter in `[0, RING_PERIOD)` that increases counter-clockwise seen from `+z` and means the
+/// same position around the axis on every ring, so that rings can be stitched in order.
+#[derive(Default)]
+struct Ring {
+    index: Vec<usize>,
+    param: Vec<f64>,
+}
+
+impl Ring {
+    fn push(&mut self, index: usize, param: f64) {
+        self.index.push(index);
+        self.param.push(param);
+    }
+
+    fn len(&self) -> usize {
+        self.index.len()
+    }
+
+    /// Parameter of the entry after `i`, `RING_PERIOD` past the last one.
+    fn next_param(&self, i: usize) -> f64 {
+        if i + 1 < self.len() {
+            self.param[i + 1]
+        } else {
+            RING_PERIOD
+        }
+    }
+}
+
+/// Sweeps `profile` around the stadium of half-length `half_length` centred on the origin along
+/// `x` (a circle when `half_length = 0`) and stitches the rings.
+///
+/// Orientation: with profile tangent `(r', z')` and the ring parameter counter-clockwise, the
+/// normal `dP/ds x dP/du` is proportional to `-z' n_h + r' e_z` (`n_h` the outward horizontal
+/// normal of the ring): the left normal of the profile in the `(r, z)` plane. Profiles are
+/// therefore written in the direction whose left side faces the blank.
+fn sweep(
+    tool: &str,
+    profile: &[[f64; 2]],
+    half_length: f64,
+    h: f64,
+) -> Result<TriangleSurface, String> {
+    let r_max = profile.iter().map(|p| p[0]).fold(0.0, f64::max);
+    let ring_size = 2 * (half_ring_segments(r_max, h)? + straight_segments(half_length, h)?);
+    let estimate = profile.len() as f64 * ring_size as f64;
+    if estimate > MAX_VERTICES {
+        return Err(format!(
+            "{tool}: resolution ({h}) is too fine: about {estimate:.2e} vertices \
+             (limit {MAX_VERTICES:e})"
+        ));
+    }
+    let mut vertices = Vec::new();
+    let mut rings = Vec::with_capacity(profile.len());
+    for &[r, z] in profile {
+        rings.push(ring(r, z, half_length, h, &mut vertices)?);
+    }
+    let mut triangles = Vec::new();
+    for pair in rings.windows(2) {
+        stitch(&pair[0], &pair[1], &mut triangles);
+    }
+    Ok(TriangleSurface {
+        vertices,
+        triangles,
+    })
+}
+
+/// The ring of profile point `(r, z)`: right half circle about `(+l, 0)` (parameter 0..1), top
+/// straight `y = r` from `x = l` to `-l` (1..2), left half circle about `(-l, 0)` (2..3), bottom
+/// straight `y = -r` back (3..4). Each piece holds its start point but not its end point.
+fn ring(r: f64, z: f64, l: f64, h: f64, vertices: &mut Vec<Vector3<f64>>) -> Result<Ring, String> {
+    if r == 0.0 {
+        return ridge(z, l, h, vertices);
+    }
+    let n_arc = half_ring_segments(r, h)?;
+    let n_straight = straight_segments(l, h)?;
+    let mut ring = Ring::default();
+    let mut add = |x: f64, y: f64, param: f64| {
+        vertices.push(Vector3::new(x, y, z));
+        ring.push(vertices.len() - 1, param);
+    };
+    for k in 0..n_arc {
+        let f = k as f64 / n_arc as f64;
+        let a = -FRAC_PI_2 + PI * f;
+        add(l + r * a.cos(), r * a.sin(), f);
+    }
+    for k in 0..n_straight {
+        let f = k as f64 / n_straight as f64;
+        add(l - 2.0 * l * f, r, 1.0 + f);
+    }
+    for k in 0..n_arc {
+        let f = k as f64 / n_arc as f64;
+        let a = FRAC_PI_2 + PI * f;
+        add(-l + r * a.cos(), r * a.sin(), 2.0 + f);
+    }
+    for k in 0..n_straight {
+        let f = k as f64 / n_straight as f64;
+        add(-l + 2.0 * l * f, -r, 3.0 + f);
+    }
+    Ok(ring)
+}
+
+/// The ring at `r = 0`: the ridge segment `|x| <= l` (a single pole when `l = 0`), traversed
+/// there and back so its parameters match those of the rings around it.
+fn ridge(z: f64, l: f64, h: f64, vertices: &mut Vec<Vector3<f64>>) -> Result<Ring, String> {
+    let n = straight_segments(l, h)?;
+    let first = vertices.len();
+    for k in 0..=n {
+        let x = if n == 0 {
+            0.0
+        } else {
+            l - 2.0 * l * k as f64 / n as f64
+        };
+        vertices.push(Vector3::new(x, 0.0, z));
+    }
+    let mut ring = Ring::default();
+    ring.push(first, 0.0);
+    for k in 0..n {
+        ring.push(first + k, 1.0 + k as f64 / n as f64);
+    }
+    ring.push(first + n, 2.0);
+    for k in 0..n {
+        ring.push(first + n - k, 3.0 + k as f64 / n as f64);
+    }
+    Ok(ring)
+}
+
+/// Triangles between ring `a` and the next ring `b` along the profile: walk both rings in
+/// parameter order, always advancing the ring whose next vertex comes first, so every triangle
+/// spans one edge of one ring and a vertex of the other. Triangles `(a_j, b_k, a_j+1)` and
+/// `(a_j, b_k, b_k+1)` have normal along `dP/ds x dP/du` (see [`sweep`]). Triangles with a
+/// repeated vertex (where a ring collapses onto the axis) are skipped.
+fn stitch(a: &Ring, b: &Ring, triangles: &mut Vec<[usize; 3]>) {
+    let (na, nb) = (a.len(), b.len());
+    let (mut j, mut k) = (0, 0);
+    while j < na || k < nb {
+        let advance_a = k == nb || (j < na && a.next_param(j) <= b.next_param(k));
+        let triangle = if advance_a {
+            let t = [a.index[j], b.index[k % nb], a.index[(j + 1) % na]];
+            j += 1;
+            t
+        } else {
+            let t = [a.index[j % na], b.index[k], b.index[(k + 1) % nb]];
+            k += 1;
+            t
+        };
+        let [p, q, s] = triangle;
+        if p != q && q != s && s != p {
+            triangles.push(triangle);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn area(s: &TriangleSurface) -> f64 {
+        s.triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| s.vertices[i]);
+                0.5 * (b - a).cross(&(c - a)).norm()
+            })
+            .sum()
+    }
+
+    #[test]
+    fn blank_holder_area_is_that_of_the_annulus() {
+        let s = blank_holder(60.0, 100.0, 1.0).unwrap();
+        let exact = PI * (100.0f64.powi(2) - 60.0f64.powi(2));
+        assert!((area(&s) - exact).abs() / exact < 1e-3);
+    }
+
+    #[test]
+    fn every_vertex_of_a_tool_is_used() {
+        let s = double_dome_punch(30.0, 20.0, 10.0, 3.0).unwrap();
+        let mut used = vec![false; s.vertices.len()];
+        for t in &s.triangles {
+            for &i in t {
+                used[i] = true;
+            }
+        }
+        assert!(used.iter().all(|&u| u));
+    }
+
+    #[test]
+    fn absurd_resolution_is_an_error_not_an_allocation() {
+        let e = hemisphere_punch(50.0, 1e-300).unwrap_err();
+        assert!(e.contains("resolution"), "{e}");
+    }
+}
