@@ -1,10 +1,14 @@
 //! Rigid tools and their contact with the blank (MODEL.md §6): triangulated surfaces, the
 //! standard tool shapes, and penalty contact with Coulomb friction.
 
+pub mod penalty;
+pub mod rigid_tool;
 pub mod stl;
 pub mod surface;
 pub mod tools;
 
+pub use penalty::{ContactSettings, NodeContact, ToolLoad};
+pub use rigid_tool::{RigidTool, ToolMotion};
 pub use stl::{parse_stl, read_stl, write_stl_ascii, write_stl_binary, StlError};
 pub use surface::{closest_point_on_triangle, Projection, TriangleSurface};
 pub use tools::{

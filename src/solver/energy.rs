@@ -9,8 +9,11 @@ pub struct Energies {
     pub internal_work: f64,
     /// Elastic energy stored in the laminate, `sum_e A0 sum_k t_k W_k` (at output instants).
     pub elastic: f64,
-    /// Work of the reaction forces at the constrained nodes: what the machine put in.
+    /// Work of the reaction forces at the constrained nodes and of the tools' contact forces
+    /// on the blank: what the machine put in.
     pub external_work: f64,
+    /// The tools' part of `external_work` (contact and friction forces on the blank).
+    pub tool_work: f64,
     /// Energy removed by the global mass-proportional damping.
     pub damping: f64,
     /// Energy taken by the yarn-rate damping (part of the internal work).

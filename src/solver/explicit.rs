@@ -12,6 +12,7 @@
 use super::energy::Energies;
 use super::model::{Model, Motion};
 use super::yarn_damping::{step_reduction, yarn_damping_resultant};
+use crate::contact::penalty::{self, NodeContact, NodeMotion, ToolLoad};
 use crate::element::Bending;
 use crate::material::{LaminateState, MaterialError, MembraneKinematics, MembraneResponse};
 use nalgebra::{Matrix2, Vector3};
@@ -65,6 +66,13 @@ pub struct State {
     pub energies: Energies,
     /// Mass added by mass scaling (tonne).
     pub added_mass: f64,
+    /// Translation of each tool from its place at the start (mm).
+    pub tool_translations: Vec<Vector3<f64>>,
+    /// Force of the blank on each tool at the last step (N): minus the punch force etc.
+    pub tool_loads: Vec<ToolLoad>,
+    /// Contact of each node with the tools (force on the node, per-tool normal and
+    /// tangential forces).
+    pub contacts: Vec<NodeContact>,
 }
 
 /// Receives the state while the solver runs.
@@ -147,6 +155,8 @@ impl NodeElements {
 /// What step `n` needs from step `n - 1` for the trapezoidal work sums.
 struct PreviousStep {
     forces: Vec<Vector3<f64>>,
+    /// Contact forces of the tools on the nodes.
+    contact: Vec<Vector3<f64>>,
     reactions: Vec<Vector3<f64>>,
     /// `x_n - x_{n-1}`.
     increments: Vec<Vector3<f64>>,
@@ -168,6 +178,7 @@ pub fn run(
     let zeros = vec![Vector3::zeros(); model.mesh.nodes.len()];
     let mut previous = PreviousStep {
         forces: zeros.clone(),
+        contact: zeros.clone(),
         reactions: zeros.clone(),
         increments: zeros,
         time_step: 0.0,
@@ -177,6 +188,13 @@ pub fn run(
     loop {
         let (stable_step, damping_power) =
             forces.evaluate(model, &mut state, previous.time_step, settings.yarn_damping)?;
+        let full_step = settings.time_step_safety * stable_step;
+        let dt = full_step.min(settings.end_time - state.time);
+        if !model.tools.is_empty() {
+            // the penalty follows the full step: a last step cut short to reach the end time
+            // would otherwise stiffen it without bound
+            tool_contact(model, &mut state, full_step);
+        }
         let last = state.time >= settings.end_time;
         if last || state.time >= next_output - 1e-9 * settings.output_interval {
             state.energies.elastic = elastic_energy(model, &state)
@@ -192,7 +210,6 @@ pub fn run(
         if last {
             return Ok(state);
         }
-        let dt = (settings.time_step_safety * stable_step).min(settings.end_time - state.time);
         state.energies.numerical_damping += damping_power * dt;
         advance(
             model,
@@ -252,11 +269,14 @@ fn advance(
     let dt_mean = 0.5 * (previous.time_step + dt);
     let t_half = state.time + 0.5 * dt;
     let (mut kinetic, mut internal, mut external, mut damping_work) = (0.0, 0.0, 0.0, 0.0);
+    let mut tool = 0.0;
     // m (v_new - v_old)/dt + c m (v_new + v_old)/2 + f = 0, solved for v_new
     let half_damp = 0.5 * damping * dt_mean;
     for (a, motion) in prescribed.iter().enumerate() {
         let m = state.masses[a];
-        let f = state.internal_forces[a];
+        let f_int = state.internal_forces[a];
+        let f_contact = state.contacts[a].force;
+        let f = f_int - f_contact;
         let v_old = state.velocities[a];
         let v_new = match motion {
             None => (v_old * (1.0 - half_damp) - f * (dt_mean / m)) / (1.0 + half_damp),
@@ -272,21 +292,52 @@ fn advance(
         if motion.is_none() {
             damping_work += damping * m * v_mid.norm_squared() * dt_mean;
         }
-        internal += 0.5 * (previous.forces[a] + f).dot(&previous.increments[a]);
+        internal += 0.5 * (previous.forces[a] + f_int).dot(&previous.increments[a]);
         external += 0.5 * (previous.reactions[a] + reaction).dot(&previous.increments[a]);
+        tool += 0.5 * (previous.contact[a] + f_contact).dot(&previous.increments[a]);
         let increment = v_new * dt;
         state.velocities[a] = v_new;
         state.reactions[a] = reaction;
         state.positions[a] += increment;
-        previous.forces[a] = f;
+        previous.forces[a] = f_int;
+        previous.contact[a] = f_contact;
         previous.reactions[a] = reaction;
         previous.increments[a] = increment;
     }
     previous.time_step = dt;
+    for (translation, tool) in state.tool_translations.iter_mut().zip(&model.tools) {
+        *translation += tool.velocity(t_half) * dt;
+    }
     state.energies.kinetic = kinetic;
     state.energies.internal_work += internal;
-    state.energies.external_work += external;
+    state.energies.external_work += external + tool;
+    state.energies.tool_work += tool;
     state.energies.damping += damping_work;
+}
+
+/// Contact forces of the tools on every node for the step `dt` about to be taken
+/// (`contact::penalty`), and the loads on the tools.
+fn tool_contact(model: &Model, state: &mut State, dt: f64) {
+    let velocities: Vec<Vector3<f64>> = model
+        .tools
+        .iter()
+        .map(|t| t.velocity(state.time + 0.5 * dt))
+        .collect();
+    let nodes: Vec<NodeMotion> = (0..state.positions.len())
+        .map(|a| NodeMotion {
+            position: state.positions[a],
+            velocity: state.velocities[a],
+            mass: state.masses[a],
+        })
+        .collect();
+    state.tool_loads = penalty::evaluate(
+        &model.tools,
+        (&state.tool_translations, &velocities),
+        &nodes,
+        dt,
+        &model.contact,
+        &mut state.contacts,
+    );
 }
 
 /// `f_int` at each node: the sum of its elements' and hinges' contributions, gathered node by
@@ -586,6 +637,9 @@ impl State {
             time_step: 0.0,
             energies: Energies::default(),
             added_mass,
+            tool_translations: vec![Vector3::zeros(); model.tools.len()],
+            tool_loads: vec![ToolLoad::default(); model.tools.len()],
+            contacts: vec![NodeContact::default(); n_nodes],
         })
     }
 }

@@ -1,5 +1,6 @@
 //! What the solver integrates: the meshed sheet, its laminate, and the constraints.
 
+use crate::contact::{ContactSettings, RigidTool};
 use crate::element::bending_triangle::BendingError;
 use crate::element::membrane_triangle::ElementError;
 use crate::element::{Bending, BendingRigidity, MembraneTriangle};
@@ -44,6 +45,9 @@ pub struct Model {
     pub elements: Vec<MembraneTriangle>,
     /// Bending stiffness; `None` for a membrane.
     pub bending: Option<Bending>,
+    /// Rigid tools in contact with the blank, and how the contact is computed.
+    pub tools: Vec<RigidTool>,
+    pub contact: ContactSettings,
     pub laminate: Laminate,
     /// Density of the ply (tonne/mm^3).
     pub density: f64,
@@ -135,6 +139,12 @@ impl Model {
             mesh,
             elements,
             bending: None,
+            tools: Vec::new(),
+            contact: ContactSettings {
+                offset: laminate.reference_thickness() / 2.0,
+                penalty_scale: 0.1,
+                max_penetration: laminate.reference_thickness(),
+            },
             laminate,
             density,
             temperature,
@@ -147,5 +157,12 @@ impl Model {
     pub fn with_bending(mut self, rigidity: BendingRigidity) -> Result<Self, ModelError> {
         self.bending = Some(Bending::new(&self.mesh, &self.elements, rigidity)?);
         Ok(self)
+    }
+
+    /// The same sheet between rigid tools, with the contact settings given.
+    pub fn with_tools(mut self, tools: Vec<RigidTool>, contact: ContactSettings) -> Self {
+        self.tools = tools;
+        self.contact = contact;
+        self
     }
 }

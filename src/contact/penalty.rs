@@ -1,0 +1,143 @@
+//! Penalty node-to-surface contact with regularised Coulomb friction (MODEL.md §6).
+//!
+//! A blank node at `x` meets a tool when its gap to the tool's surface, offset by half the
+//! blank's thickness, is negative: `g = (x - p) . n - t/2 < 0` with `p` the nearest point of the
+//! surface and `n` its normal (towards the blank). The tool then pushes it back with
+//! `f_n = -k g n`, `k = s m / dt^2` for a node of mass `m` (the soft constraint of LS-DYNA:
+//! with `s < 1` the contact spring `sqrt(k/m) dt = sqrt(s)` stays within the stable step of
+//! central differences whatever the tool, so contact never shortens the step).
+//!
+//! Friction is regularised Coulomb, an elastic stick with the same stiffness and a slip
+//! limit: the tangential force carried from the last step, projected on the current tangent
+//! plane, is decreased by `k v_t dt` (`v_t` the tangential velocity of the node relative to the
+//! tool), then scaled back to `mu |f_n|` if it exceeds it (slip). In sliding the friction force
+//! is therefore exactly `mu |f_n|` against the slip direction; in sticking, below it.
+
+use super::rigid_tool::RigidTool;
+use nalgebra::Vector3;
+use rayon::prelude::*;
+
+/// How the contact is computed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ContactSettings {
+    /// Distance from the blank's mid-surface to its contact faces (mm): half its thickness.
+    pub offset: f64,
+    /// `s` of the penalty `k = s m / dt^2`, in (0, 1).
+    pub penalty_scale: f64,
+    /// Penetrations deeper than this (mm) are not contact but a node that went through or
+    /// lies behind the tool (the far side of a thin tool), and are ignored.
+    pub max_penetration: f64,
+}
+
+/// What a node does with the tools: its contact force, and per tool the tangential force it
+/// carries and its normal force (0 when not touching).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct NodeContact {
+    pub force: Vector3<f64>,
+    pub tangential: Vec<Vector3<f64>>,
+    pub normal_force: Vec<f64>,
+}
+
+/// The force of the blank on one tool (N), and how many nodes touch it.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ToolLoad {
+    pub force: Vector3<f64>,
+    /// Sum of the normal forces `|f_n|` (N).
+    pub normal_force: f64,
+    pub nodes_in_contact: usize,
+}
+
+/// The kinematics of a node in a contact evaluation.
+#[derive(Clone, Copy, Debug)]
+pub struct NodeMotion {
+    pub position: Vector3<f64>,
+    pub velocity: Vector3<f64>,
+    pub mass: f64,
+}
+
+/// Contact forces on every node for the step `dt` about to be taken, from the tools placed at
+/// `translations` and moving at `tool_velocities`; updates `contacts` (one per node) and
+/// returns the load on each tool.
+pub fn evaluate(
+    tools: &[RigidTool],
+    (translations, tool_velocities): (&[Vector3<f64>], &[Vector3<f64>]),
+    nodes: &[NodeMotion],
+    dt: f64,
+    settings: &ContactSettings,
+    contacts: &mut [NodeContact],
+) -> Vec<ToolLoad> {
+    contacts
+        .par_iter_mut()
+        .zip(nodes.par_iter())
+        .map(|(contact, node)| {
+            let mut loads = vec![ToolLoad::default(); tools.len()];
+            contact.force = Vector3::zeros();
+            contact.tangential.resize(tools.len(), Vector3::zeros());
+            contact.normal_force.resize(tools.len(), 0.0);
+            for (k, tool) in tools.iter().enumerate() {
+                let moving = (translations[k], tool_velocities[k]);
+                let f = node_tool_force(tool, moving, node, dt, settings, contact, k);
+                contact.force += f;
+                if contact.normal_force[k] > 0.0 {
+                    loads[k] = ToolLoad {
+                        force: -f,
+                        normal_force: contact.normal_force[k],
+                        nodes_in_contact: 1,
+                    };
+                }
+            }
+            loads
+        })
+        .reduce(
+            || vec![ToolLoad::default(); tools.len()],
+            |mut a, b| {
+                for (x, y) in a.iter_mut().zip(b) {
+                    x.force += y.force;
+                    x.normal_force += y.normal_force;
+                    x.nodes_in_contact += y.nodes_in_contact;
+                }
+                a
+            },
+        )
+}
+
+/// The force of tool `k` on one node; records the node's tangential and normal force.
+fn node_tool_force(
+    tool: &RigidTool,
+    (translation, tool_velocity): (Vector3<f64>, Vector3<f64>),
+    node: &NodeMotion,
+    dt: f64,
+    settings: &ContactSettings,
+    contact: &mut NodeContact,
+    k: usize,
+) -> Vector3<f64> {
+    let local = node.position - translation;
+    let gap = tool
+        .nearest(&local)
+        .map(|p| (p.normal, (local - p.point).dot(&p.normal) - settings.offset));
+    let (normal, gap) = match gap {
+        Some((n, g)) if g < 0.0 && g > -settings.max_penetration => (n, g),
+        _ => {
+            contact.tangential[k] = Vector3::zeros();
+            contact.normal_force[k] = 0.0;
+            return Vector3::zeros();
+        }
+    };
+    let stiffness = settings.penalty_scale * node.mass / (dt * dt);
+    let normal_force = -stiffness * gap;
+    let slip_velocity = {
+        let relative = node.velocity - tool_velocity;
+        relative - normal * relative.dot(&normal)
+    };
+    let carried = contact.tangential[k] - normal * contact.tangential[k].dot(&normal);
+    let trial = carried - slip_velocity * (stiffness * dt);
+    let limit = tool.friction * normal_force;
+    let tangential = if trial.norm() > limit {
+        trial * (limit / trial.norm())
+    } else {
+        trial
+    };
+    contact.tangential[k] = tangential;
+    contact.normal_force[k] = normal_force;
+    normal * normal_force + tangential
+}

@@ -1,0 +1,161 @@
+//! A rigid tool in a run: its surface, how it moves, its friction, and a grid over its
+//! triangles for the nearest-point search.
+
+use super::surface::{closest_point_on_triangle, Projection, TriangleSurface};
+use nalgebra::Vector3;
+use std::collections::HashMap;
+use std::sync::Arc;
+
+/// Velocity of a tool (mm/s) at time `t`; tools translate, they do not turn.
+pub type ToolVelocity = Arc<dyn Fn(f64) -> Vector3<f64> + Send + Sync>;
+
+/// How a tool moves.
+#[derive(Clone)]
+pub enum ToolMotion {
+    Fixed,
+    /// Prescribed velocity history.
+    Velocity(ToolVelocity),
+}
+
+impl std::fmt::Debug for ToolMotion {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ToolMotion::Fixed => write!(f, "Fixed"),
+            ToolMotion::Velocity(_) => write!(f, "Velocity(..)"),
+        }
+    }
+}
+
+/// A rigid tool: surface (in its own frame, placed at the origin of the run), motion and the
+/// Coulomb friction coefficient between it and the blank.
+#[derive(Clone, Debug)]
+pub struct RigidTool {
+    pub name: String,
+    pub surface: TriangleSurface,
+    pub motion: ToolMotion,
+    pub friction: f64,
+    grid: SurfaceGrid,
+}
+
+impl RigidTool {
+    /// `search_radius` (mm): how far from the surface a node is still looked up; the contact
+    /// offset (half the blank's thickness) plus the largest penetration expected.
+    pub fn new(
+        name: &str,
+        surface: TriangleSurface,
+        motion: ToolMotion,
+        friction: f64,
+        search_radius: f64,
+    ) -> Result<Self, String> {
+        if !(friction.is_finite() && friction >= 0.0) {
+            return Err(format!("tool '{name}': friction = {friction} must be >= 0"));
+        }
+        if surface.triangles.is_empty() {
+            return Err(format!("tool '{name}': the surface has no triangles"));
+        }
+        if !(search_radius.is_finite() && search_radius > 0.0) {
+            return Err(format!(
+                "tool '{name}': search radius = {search_radius} must be > 0"
+            ));
+        }
+        let grid = SurfaceGrid::new(&surface, search_radius);
+        Ok(Self {
+            name: name.into(),
+            surface,
+            motion,
+            friction,
+            grid,
+        })
+    }
+
+    /// The tool's velocity at `t`.
+    pub fn velocity(&self, t: f64) -> Vector3<f64> {
+        match &self.motion {
+            ToolMotion::Fixed => Vector3::zeros(),
+            ToolMotion::Velocity(v) => v(t),
+        }
+    }
+
+    /// The nearest point of the surface to `p` (in the tool's frame) among the triangles
+    /// within the search radius; `None` when there is none.
+    pub fn nearest(&self, p: &Vector3<f64>) -> Option<Projection> {
+        let candidates = self.grid.candidates(p)?;
+        candidates
+            .iter()
+            .map(|&k| {
+                let [a, b, c] = self.surface.triangles[k].map(|i| self.surface.vertices[i]);
+                let point = closest_point_on_triangle(p, &a, &b, &c);
+                (k, point, (p - point).norm_squared())
+            })
+            .min_by(|x, y| x.2.total_cmp(&y.2))
+            .map(|(triangle, point, _)| Projection {
+                triangle,
+                point,
+                normal: self.surface.normal(triangle),
+            })
+    }
+}
+
+/// A uniform grid over the surface: each cell lists the triangles whose bounding box, grown
+/// by the search radius, overlaps it. A query reads one cell.
+#[derive(Clone, Debug)]
+struct SurfaceGrid {
+    origin: Vector3<f64>,
+    cell: f64,
+    cells: HashMap<[i64; 3], Vec<usize>>,
+}
+
+impl SurfaceGrid {
+    fn new(surface: &TriangleSurface, radius: f64) -> Self {
+        let (lo, _) = surface.bounds();
+        let mean_edge = mean_edge_length(surface);
+        // cells about the size of a triangle (and of the search radius), so that a cell
+        // holds a handful of triangles
+        let cell = mean_edge.max(radius).max(1e-9);
+        let origin = lo - Vector3::repeat(radius);
+        let mut cells: HashMap<[i64; 3], Vec<usize>> = HashMap::new();
+        for (k, t) in surface.triangles.iter().enumerate() {
+            let corners = t.map(|i| surface.vertices[i]);
+            let mut a = corners[0];
+            let mut b = corners[0];
+            for c in &corners[1..] {
+                a = a.inf(c);
+                b = b.sup(c);
+            }
+            let index = |p: Vector3<f64>| -> [i64; 3] {
+                std::array::from_fn(|d| ((p[d] - origin[d]) / cell).floor() as i64)
+            };
+            let (i0, i1) = (
+                index(a - Vector3::repeat(radius)),
+                index(b + Vector3::repeat(radius)),
+            );
+            for x in i0[0]..=i1[0] {
+                for y in i0[1]..=i1[1] {
+                    for z in i0[2]..=i1[2] {
+                        cells.entry([x, y, z]).or_default().push(k);
+                    }
+                }
+            }
+        }
+        Self {
+            origin,
+            cell,
+            cells,
+        }
+    }
+
+    fn candidates(&self, p: &Vector3<f64>) -> Option<&Vec<usize>> {
+        let key: [i64; 3] =
+            std::array::from_fn(|d| ((p[d] - self.origin[d]) / self.cell).floor() as i64);
+        self.cells.get(&key)
+    }
+}
+
+fn mean_edge_length(surface: &TriangleSurface) -> f64 {
+    let total: f64 = surface
+        .triangles
+        .iter()
+        .map(|t| (surface.vertices[t[1]] - surface.vertices[t[0]]).norm())
+        .sum();
+    total / surface.triangles.len() as f64
+}
