@@ -15,6 +15,13 @@ pub enum ToolMotion {
     Fixed,
     /// Prescribed velocity history.
     Velocity(ToolVelocity),
+    /// Pushed by a constant `force` (N), free to move along it, resisted by the blank only: a
+    /// blank holder under its blank-holder force. `mass` (tonne) is the tool's inertia in the
+    /// simulation; the blank's mass or more keeps the tool stable on the contact springs.
+    Force {
+        force: Vector3<f64>,
+        mass: f64,
+    },
 }
 
 impl std::fmt::Debug for ToolMotion {
@@ -22,6 +29,9 @@ impl std::fmt::Debug for ToolMotion {
         match self {
             ToolMotion::Fixed => write!(f, "Fixed"),
             ToolMotion::Velocity(_) => write!(f, "Velocity(..)"),
+            ToolMotion::Force { force, mass } => {
+                write!(f, "Force {{ force: {force:?}, mass: {mass} }}")
+            }
         }
     }
 }
@@ -58,6 +68,16 @@ impl RigidTool {
                 "tool '{name}': search radius = {search_radius} must be > 0"
             ));
         }
+        if let ToolMotion::Force { force, mass } = &motion {
+            if !(force.iter().all(|c| c.is_finite()) && force.norm() > 0.0) {
+                return Err(format!(
+                    "tool '{name}': the driving force must be finite and not zero"
+                ));
+            }
+            if !(mass.is_finite() && *mass > 0.0) {
+                return Err(format!("tool '{name}': mass = {mass} must be > 0"));
+            }
+        }
         let grid = SurfaceGrid::new(&surface, search_radius);
         Ok(Self {
             name: name.into(),
@@ -68,11 +88,23 @@ impl RigidTool {
         })
     }
 
-    /// The tool's velocity at `t`.
-    pub fn velocity(&self, t: f64) -> Vector3<f64> {
+    /// The tool's velocity at `t` for a step `dt`, from its velocity over the last step and the
+    /// force of the blank on it (used by a force-driven tool only).
+    pub fn velocity(
+        &self,
+        t: f64,
+        dt: f64,
+        (last, load): (Vector3<f64>, Vector3<f64>),
+    ) -> Vector3<f64> {
         match &self.motion {
             ToolMotion::Fixed => Vector3::zeros(),
             ToolMotion::Velocity(v) => v(t),
+            ToolMotion::Force { force, mass } => {
+                // only along the applied force: a holder slides along the stroke axis
+                let axis = force.normalize();
+                let accelerating = (force + load).dot(&axis) / mass;
+                axis * (last.dot(&axis) + accelerating * dt)
+            }
         }
     }
 

@@ -66,8 +66,10 @@ pub struct State {
     pub energies: Energies,
     /// Mass added by mass scaling (tonne).
     pub added_mass: f64,
-    /// Translation of each tool from its place at the start (mm).
+    /// Translation of each tool from its place at the start (mm), and its velocity over the
+    /// last step (mm/s).
     pub tool_translations: Vec<Vector3<f64>>,
+    pub tool_velocities: Vec<Vector3<f64>>,
     /// Force of the blank on each tool at the last step (N): minus the punch force etc.
     pub tool_loads: Vec<ToolLoad>,
     /// Contact of each node with the tools (force on the node, per-tool normal and
@@ -305,8 +307,10 @@ fn advance(
         previous.increments[a] = increment;
     }
     previous.time_step = dt;
-    for (translation, tool) in state.tool_translations.iter_mut().zip(&model.tools) {
-        *translation += tool.velocity(t_half) * dt;
+    for (k, tool) in model.tools.iter().enumerate() {
+        let last = (state.tool_velocities[k], state.tool_loads[k].force);
+        state.tool_velocities[k] = tool.velocity(t_half, dt, last);
+        state.tool_translations[k] += state.tool_velocities[k] * dt;
     }
     state.energies.kinetic = kinetic;
     state.energies.internal_work += internal;
@@ -321,7 +325,11 @@ fn tool_contact(model: &Model, state: &mut State, dt: f64) {
     let velocities: Vec<Vector3<f64>> = model
         .tools
         .iter()
-        .map(|t| t.velocity(state.time + 0.5 * dt))
+        .enumerate()
+        .map(|(k, t)| {
+            let last = (state.tool_velocities[k], state.tool_loads[k].force);
+            t.velocity(state.time + 0.5 * dt, dt, last)
+        })
         .collect();
     let nodes: Vec<NodeMotion> = (0..state.positions.len())
         .map(|a| NodeMotion {
@@ -638,6 +646,7 @@ impl State {
             energies: Energies::default(),
             added_mass,
             tool_translations: vec![Vector3::zeros(); model.tools.len()],
+            tool_velocities: vec![Vector3::zeros(); model.tools.len()],
             tool_loads: vec![ToolLoad::default(); model.tools.len()],
             contacts: vec![NodeContact::default(); n_nodes],
         })
