@@ -7,6 +7,7 @@
 //! - [`experiment`]: virtual material tests, starting with the material-point driver;
 //! - [`contact`]: rigid tools (triangulated surfaces) and their contact with the blank;
 //! - [`drape`]: kinematic (pin-jointed net) draping, a quick shear preview before forming;
+//! - [`forming`]: thermo-stamping runs from a scenario file (blank, tools, process);
 //! - [`io`]: readers and writers of the files users hand in and get back;
 //! - [`cli`]: the `thermostamp` command line.
 
@@ -15,6 +16,7 @@ pub mod contact;
 pub mod drape;
 pub mod element;
 pub mod experiment;
+pub mod forming;
 pub mod io;
 pub mod material;
 pub mod mesh;

@@ -4,7 +4,9 @@
 //! 2 bad input (usage, files, values, or a history the material cannot follow). Errors are
 //! one line on standard error.
 
+mod forming_run;
 mod material_point;
+mod shared;
 mod virtual_test;
 
 use crate::solver::SolverError;
@@ -31,6 +33,8 @@ enum Command {
     /// Virtual material tests of a sheet, run with the explicit solver.
     #[command(subcommand)]
     Test(virtual_test::TestCommand),
+    /// A thermo-stamping run described by a scenario file (blank, tools, process).
+    Run(forming_run::Args),
 }
 
 /// Runs the command line and returns the process exit code.
@@ -45,6 +49,7 @@ pub fn main() -> i32 {
     let result = match cli.command {
         Command::MaterialPoint(args) => material_point::run(&args),
         Command::Test(command) => virtual_test::run(&command),
+        Command::Run(args) => forming_run::run(&args),
     };
     match result {
         Ok(()) => 0,

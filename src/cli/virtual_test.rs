@@ -1,6 +1,7 @@
 //! `thermostamp test ...`: the virtual material tests, with CSV, ParaView and PNG output, a
 //! progress bar and a summary table.
 
+use super::shared::{with_threads, Bar};
 use crate::experiment::bias_extension::{BiasExtension, BiasRow};
 use crate::experiment::picture_frame::{PictureFrame, PictureFrameRow};
 use crate::experiment::sheet_test::{
@@ -14,7 +15,6 @@ use crate::io::write_csv;
 use crate::material::MaterialCard;
 use crate::mesh::DiagonalPattern;
 use anyhow::Context;
-use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 
 #[derive(clap::Subcommand, Debug)]
@@ -141,21 +141,6 @@ pub fn run(command: &TestCommand) -> anyhow::Result<()> {
         TestCommand::PictureFrame(args) => {
             with_threads(args.common.threads, || picture_frame(args))
         }
-    }
-}
-
-fn with_threads(
-    threads: Option<usize>,
-    job: impl FnOnce() -> anyhow::Result<()> + Send,
-) -> anyhow::Result<()> {
-    match threads {
-        None => job(),
-        Some(0) => anyhow::bail!("--threads must be at least 1"),
-        Some(n) => rayon::ThreadPoolBuilder::new()
-            .num_threads(n)
-            .build()
-            .context("cannot start the worker threads")?
-            .install(job),
     }
 }
 
@@ -540,35 +525,5 @@ fn known(value: f64, text: impl FnOnce() -> String) -> String {
         text()
     } else {
         "- (the run stopped)".into()
-    }
-}
-
-/// Progress bar over simulated time; hidden when standard error is not a terminal.
-struct Bar {
-    bar: ProgressBar,
-    end_time: f64,
-}
-
-impl Bar {
-    fn new(end_time: f64) -> Self {
-        let bar = ProgressBar::new(1000);
-        bar.set_style(
-            ProgressStyle::with_template("{bar:40} {percent:>3}%  {msg}  ETA {eta}")
-                .unwrap_or_else(|_| ProgressStyle::default_bar()),
-        );
-        Self { bar, end_time }
-    }
-
-    fn finish(&self) {
-        self.bar.finish_and_clear();
-    }
-}
-
-impl Progress for Bar {
-    fn update(&mut self, time: f64, step: usize) {
-        self.bar
-            .set_position((1000.0 * time / self.end_time) as u64);
-        self.bar
-            .set_message(format!("step {step}, t = {time:.4e} s"));
     }
 }

@@ -329,7 +329,8 @@ impl Observer for Recorder<'_, '_> {
     }
 }
 
-fn write_frame(series: &mut PvdSeries, model: &Model, state: &State) -> anyhow::Result<()> {
+/// Writes one ParaView frame of the sheet at `state` to `series`.
+pub fn write_frame(series: &mut PvdSeries, model: &Model, state: &State) -> anyhow::Result<()> {
     let frame = sheet_frame(model, state)?;
     series.add_frame(
         state.time,

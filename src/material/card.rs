@@ -5,6 +5,7 @@
 use super::fabric::{ShearInteraction, YarnTension};
 use super::{Laminate, Layer, MaterialLaw, TemperatureTable, ViscoHyperelasticMatrix, WovenFabric};
 use crate::element::BendingRigidity;
+use crate::io::describe_toml_error;
 use serde::Deserialize;
 use std::path::Path;
 use std::sync::Arc;
@@ -120,20 +121,6 @@ impl MaterialCard {
         let file: CardFile =
             toml::from_str(text).map_err(|e| error(describe_toml_error(text, &e)))?;
         file.check().map_err(error)
-    }
-}
-
-/// One line: `line L, column C: message`.
-fn describe_toml_error(text: &str, e: &toml::de::Error) -> String {
-    let message = e.message().trim().replace('\n', " ");
-    match e.span() {
-        Some(span) => {
-            let before = &text[..span.start.min(text.len())];
-            let line = before.matches('\n').count() + 1;
-            let column = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
-            format!("line {line}, column {column}: {message}")
-        }
-        None => message,
     }
 }
 

@@ -5,7 +5,8 @@ use nalgebra::Vector3;
 use std::collections::BTreeMap;
 
 /// How each rectangular cell is cut into triangles.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum DiagonalPattern {
     /// One diagonal per cell, all the same way (`/`): cheap, but has a preferred direction.
     Right,

@@ -1,0 +1,215 @@
+//! `thermostamp run scenario.toml`: a thermo-stamping run with CSV history, ParaView frames, a
+//! punch-force plot, a progress bar and a summary table.
+
+use super::shared::{with_threads, Bar};
+use crate::experiment::sheet_test::FrameOutput;
+use crate::forming::{run::FormingRun, FormingModel, FormingRecord, Scenario};
+use crate::io::plot::{write_png, LinePlot, LineStyle, Series};
+use crate::io::vtk::PvdSeries;
+use crate::io::write_csv;
+use anyhow::Context;
+use std::path::{Path, PathBuf};
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Scenario file (TOML): blank, tools, process, output.
+    scenario: PathBuf,
+    /// Override a scalar of the scenario, e.g. --set process.temperature=310 (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    overrides: Vec<String>,
+    /// Output folder (overrides output.folder).
+    #[arg(long)]
+    output: Option<PathBuf>,
+    /// Worker threads for the element loop (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+}
+
+pub fn run(args: &Args) -> anyhow::Result<()> {
+    with_threads(args.threads, || forming(args))
+}
+
+fn forming(args: &Args) -> anyhow::Result<()> {
+    let scenario = Scenario::load(&args.scenario, &args.overrides)?;
+    let dir = args
+        .output
+        .clone()
+        .unwrap_or_else(|| scenario.output.folder.clone());
+    let forming = FormingModel::new(&scenario).map_err(|e| anyhow::anyhow!(e))?;
+    std::fs::create_dir_all(&dir)
+        .with_context(|| format!("cannot create the output folder {}", dir.display()))?;
+    let frames = match scenario.output.frames {
+        0 => None,
+        n => Some(FrameOutput {
+            series: PvdSeries::new(&dir, "forming")?,
+            every: (scenario.output.history_points / n).max(1),
+        }),
+    };
+    let mut bar = Bar::new(forming.settings.end_time);
+    let result = crate::forming::run::run(&forming, frames, Some(&mut bar));
+    bar.finish();
+    if result.records.is_empty() {
+        return result.outcome.map(|_| ()).map_err(anyhow::Error::from);
+    }
+    let mut files = write_outputs(&dir, &result.records)?;
+    if scenario.output.frames > 0 {
+        files.push(dir.join("forming.pvd"));
+    }
+    print_summary(&scenario, &forming, &result, &files);
+    result.outcome.map(|_| ()).map_err(anyhow::Error::from)
+}
+
+const COLUMNS: [&str; 14] = [
+    "time",
+    "stroke",
+    "punch_force",
+    "holder_force",
+    "holder_travel",
+    "draw_in",
+    "max_shear_deg",
+    "kinetic",
+    "internal_work",
+    "elastic",
+    "viscous_dissipation",
+    "tool_work",
+    "external_work",
+    "energy_balance_error",
+];
+
+fn row(r: &FormingRecord) -> [f64; 14] {
+    let e = &r.energies;
+    [
+        r.time,
+        r.stroke,
+        r.punch_force,
+        r.holder_force,
+        r.holder_travel,
+        r.draw_in,
+        r.max_shear,
+        e.kinetic,
+        e.internal_work,
+        e.elastic,
+        e.viscous_dissipation(),
+        e.tool_work,
+        e.external_work,
+        e.balance_error(),
+    ]
+}
+
+/// `forming.csv` and `forming-punch-force.png`.
+fn write_outputs(dir: &Path, records: &[FormingRecord]) -> anyhow::Result<Vec<PathBuf>> {
+    let csv = dir.join("forming.csv");
+    let file =
+        std::fs::File::create(&csv).with_context(|| format!("cannot create {}", csv.display()))?;
+    write_csv(
+        &mut std::io::BufWriter::new(file),
+        &COLUMNS,
+        records.iter().map(row),
+    )
+    .with_context(|| format!("cannot write {}", csv.display()))?;
+    let png = dir.join("forming-punch-force.png");
+    let plot = LinePlot {
+        title: "Forming: punch force".into(),
+        x_label: "punch stroke (mm)".into(),
+        y_label: "punch force (N)".into(),
+        series: vec![Series::new(
+            "simulation",
+            records.iter().map(|r| (r.stroke, r.punch_force)).collect(),
+            LineStyle::Solid,
+        )],
+    };
+    write_png(&png, &plot, 900, 600)?;
+    Ok(vec![csv, png])
+}
+
+/// Fraction of the final internal work from which the kinetic energy is compared with it.
+const KINETIC_CHECK_FROM: f64 = 0.05;
+
+fn print_summary(
+    scenario: &Scenario,
+    forming: &FormingModel,
+    result: &FormingRun,
+    files: &[PathBuf],
+) {
+    let last = result.records.last();
+    let peak_force = result
+        .records
+        .iter()
+        .map(|r| r.punch_force)
+        .fold(0.0, f64::max);
+    // before the blank carries load the internal work is tiny and the ratio meaningless
+    let final_work = last.map_or(0.0, |r| r.energies.internal_work);
+    let worst_kinetic = result
+        .records
+        .iter()
+        .filter(|r| r.energies.internal_work > KINETIC_CHECK_FROM * final_work)
+        .map(|r| r.energies.kinetic / r.energies.internal_work)
+        .fold(0.0, f64::max);
+    let elements = forming.model.elements.len();
+    let rows = [
+        ("scenario", scenario.origin.clone()),
+        (
+            "blank",
+            format!(
+                "{} elements, {} nodes, bending {}",
+                elements,
+                forming.model.mesh.nodes.len(),
+                if forming.model.bending.is_some() {
+                    "on"
+                } else {
+                    "off (the card has no [bending])"
+                }
+            ),
+        ),
+        ("steps", format!("{}", result.steps)),
+        (
+            "stroke reached",
+            format!("{:.2} mm", last.map_or(0.0, |r| r.stroke)),
+        ),
+        ("peak punch force", format!("{peak_force:.2} N")),
+        (
+            "largest shear angle",
+            format!("{:.1}°", last.map_or(0.0, |r| r.max_shear)),
+        ),
+        (
+            "draw-in of the edge",
+            format!("{:.2} mm", last.map_or(0.0, |r| r.draw_in)),
+        ),
+        (
+            "kinetic / internal energy",
+            format!(
+                "{:.2} % at most once the internal work passes {} % of its final value",
+                100.0 * worst_kinetic,
+                100.0 * KINETIC_CHECK_FROM
+            ),
+        ),
+        (
+            "energy balance error",
+            format!(
+                "{:.3} % of external work",
+                100.0 * last.map_or(0.0, |r| r.energies.balance_error())
+            ),
+        ),
+        (
+            "time scaling",
+            format!("{} (eta1 divided by it)", scenario.process.time_scaling),
+        ),
+        (
+            "wall time",
+            format!(
+                "{:.1} s on {} threads ({:.2e} element-steps/s)",
+                result.wall_seconds,
+                rayon::current_num_threads(),
+                (result.steps * elements) as f64 / result.wall_seconds.max(1e-9)
+            ),
+        ),
+    ];
+    println!("{:-<64}", "");
+    for (name, value) in rows {
+        println!("{name:<28}{value}");
+    }
+    println!("{:-<64}", "");
+    for f in files {
+        println!("wrote {}", f.display());
+    }
+}

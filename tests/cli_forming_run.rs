@@ -1,0 +1,116 @@
+//! `thermostamp run` as a user runs it: the bundled hemisphere example in a reduced form (the
+//! CI check that keeps it from rotting), and bad scenarios refused with exit code 2 and one
+//! line naming the key or the file.
+
+mod common;
+
+use common::thermostamp;
+use std::path::PathBuf;
+
+fn out_dir(name: &str) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
+
+/// The example on 10 mm cells, 8 mm of stroke, two frames: it reaches the stroke, writes its
+/// files, and the punch force grows with the stroke.
+#[test]
+fn hemisphere_example_runs_in_reduced_form() {
+    let dir = out_dir("forming-hemisphere");
+    let out = thermostamp(&[
+        "run",
+        "examples/hemisphere.toml",
+        "--set",
+        "blank.element_size=10",
+        "--set",
+        "process.stroke=8",
+        "--set",
+        "output.frames=2",
+        "--set",
+        "output.history_points=8",
+        "--output",
+        dir.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    for line in [
+        "stroke reached              8.00 mm",
+        "peak punch force",
+        "bending on",
+    ] {
+        assert!(stdout.contains(line), "summary lacks '{line}':\n{stdout}");
+    }
+    for file in ["forming.csv", "forming-punch-force.png", "forming.pvd"] {
+        assert!(dir.join(file).exists(), "{file} missing");
+    }
+    let csv = std::fs::read_to_string(dir.join("forming.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    assert_eq!(&header[..3], &["time", "stroke", "punch_force"]);
+    let force: Vec<f64> = lines
+        .map(|l| l.split(',').nth(2).unwrap().parse().unwrap())
+        .collect();
+    assert!(force.last().unwrap() > &force[force.len() / 2]);
+}
+
+/// Bad scenarios: exit code 2 and the key, line or file named.
+#[test]
+fn bad_scenarios_are_refused_with_the_key_named() {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("bad-scenarios");
+    std::fs::create_dir_all(&dir).unwrap();
+    let example = std::fs::read_to_string(common::repo_path("examples/hemisphere.toml")).unwrap();
+    let example = example.replace(
+        "../materials/",
+        &format!("{}/materials/", env!("CARGO_MANIFEST_DIR")),
+    );
+    let cases = [
+        (
+            "unknown-key",
+            example.replace("stroke = 30.0", "stroke = 30.0\nstrok = 3"),
+            "strok",
+        ),
+        (
+            "missing-card",
+            example.replace("t300-5hs-pps.toml", "nothing.toml"),
+            "nothing.toml",
+        ),
+        (
+            "deep-stroke",
+            example.replace("stroke = 30.0", "stroke = 95.0"),
+            "process.stroke",
+        ),
+        (
+            "punch-too-big",
+            example.replace("punch_radius = 40.0", "punch_radius = 45.0"),
+            "die_opening_radius",
+        ),
+        (
+            "negative-force",
+            example.replace("blank_holder_force = 200.0", "blank_holder_force = -5.0"),
+            "blank_holder_force",
+        ),
+    ];
+    for (name, text, expected) in cases {
+        let path = dir.join(format!("{name}.toml"));
+        std::fs::write(&path, text).unwrap();
+        let out = thermostamp(&["run", path.to_str().unwrap()]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{name}: {stderr}");
+        assert!(stderr.contains(expected), "{name}: {stderr}");
+        assert_eq!(stderr.trim().lines().count(), 1, "{name}: {stderr}");
+    }
+    let out = thermostamp(&[
+        "run",
+        "examples/hemisphere.toml",
+        "--set",
+        "process.temprature=300",
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("temprature"), "{stderr}");
+    let out = thermostamp(&["run", "no/such/scenario.toml"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no/such/scenario.toml"));
+}
