@@ -42,8 +42,26 @@ fn hemisphere_example_runs_in_reduced_form() {
     ] {
         assert!(stdout.contains(line), "summary lacks '{line}':\n{stdout}");
     }
-    for file in ["forming.csv", "forming-punch-force.png", "forming.pvd"] {
+    for file in [
+        "forming.csv",
+        "forming-punch-force.png",
+        "forming.pvd",
+        "forming_0002.vtu",
+    ] {
         assert!(dir.join(file).exists(), "{file} missing");
+    }
+    let frame = std::fs::read_to_string(dir.join("forming_0002.vtu")).unwrap();
+    for field in [
+        "shear_angle_deg",
+        "contact_pressure",
+        "contact_status",
+        "gap_punch",
+        "gap_die",
+    ] {
+        assert!(
+            frame.contains(&format!("Name=\"{field}\"")),
+            "frame lacks {field}"
+        );
     }
     let csv = std::fs::read_to_string(dir.join("forming.csv")).unwrap();
     let mut lines = csv.lines();

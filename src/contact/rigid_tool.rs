@@ -128,6 +128,27 @@ impl RigidTool {
     }
 }
 
+impl RigidTool {
+    /// Signed gap of a blank face to the surface, for output: the distance from `p` (in the
+    /// tool's frame) along the normal of the nearest point of the whole surface, less `offset`.
+    /// A full search, for frames, not for every step.
+    pub fn gap(&self, p: &Vector3<f64>, offset: f64) -> f64 {
+        self.surface
+            .triangles
+            .iter()
+            .enumerate()
+            .map(|(k, t)| {
+                let [a, b, c] = t.map(|i| self.surface.vertices[i]);
+                let q = closest_point_on_triangle(p, &a, &b, &c);
+                (k, q, (p - q).norm_squared())
+            })
+            .min_by(|x, y| x.2.total_cmp(&y.2))
+            .map_or(f64::INFINITY, |(k, q, _)| {
+                (p - q).dot(&self.surface.normal(k)) - offset
+            })
+    }
+}
+
 /// A uniform grid over the surface: each cell lists the triangles whose bounding box, grown
 /// by the search radius, overlaps it. A query reads one cell.
 #[derive(Clone, Debug)]
@@ -190,4 +211,44 @@ fn mean_edge_length(surface: &TriangleSurface) -> f64 {
         .map(|t| (surface.vertices[t[1]] - surface.vertices[t[0]]).norm())
         .sum();
     total / surface.triangles.len() as f64
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn floor() -> TriangleSurface {
+        TriangleSurface {
+            vertices: vec![
+                Vector3::new(-1.0, -1.0, 0.0),
+                Vector3::new(1.0, -1.0, 0.0),
+                Vector3::new(1.0, 1.0, 0.0),
+                Vector3::new(-1.0, 1.0, 0.0),
+            ],
+            triangles: vec![[0, 1, 2], [0, 2, 3]],
+        }
+    }
+
+    #[test]
+    fn nearest_within_the_search_radius_and_gap_anywhere() {
+        let tool = RigidTool::new("floor", floor(), ToolMotion::Fixed, 0.1, 0.5).unwrap();
+        let near = tool.nearest(&Vector3::new(0.3, -0.2, 0.2)).unwrap();
+        assert!((near.point - Vector3::new(0.3, -0.2, 0.0)).norm() < 1e-15);
+        assert!((near.normal - Vector3::z()).norm() < 1e-15);
+        assert!(tool.nearest(&Vector3::new(0.3, -0.2, 3.0)).is_none());
+        assert!((tool.gap(&Vector3::new(0.3, -0.2, 3.0), 0.15) - 2.85).abs() < 1e-12);
+        assert!((tool.gap(&Vector3::new(0.0, 0.0, -0.1), 0.15) + 0.25).abs() < 1e-12);
+    }
+
+    #[test]
+    fn bad_tools_are_refused_with_their_name() {
+        let e = RigidTool::new("die", floor(), ToolMotion::Fixed, -0.1, 0.5).unwrap_err();
+        assert!(e.contains("die") && e.contains("friction"));
+        let holder = ToolMotion::Force {
+            force: Vector3::zeros(),
+            mass: 1.0,
+        };
+        let e = RigidTool::new("holder", floor(), holder, 0.1, 0.5).unwrap_err();
+        assert!(e.contains("holder") && e.contains("force"));
+    }
 }

@@ -22,7 +22,9 @@ fn in_plane(t: &Matrix3<f64>) -> [f64; 3] {
     [t[(0, 0)], t[(1, 1)], t[(0, 1)]]
 }
 
-/// Point data: displacement, velocity, reaction. Cell data: shear angle (degrees), current
+/// Point data: displacement, velocity, reaction; with tools, the contact pressure (MPa), the
+/// contact status (1 + index of the tool pressing hardest, 0 when free) and the gap of the
+/// blank's faces to each tool (mm, `gap_<tool>`). Cell data: shear angle (degrees), current
 /// warp and weft directions, thickness, membrane forces `N` (xx, yy, xy in the reference
 /// x–y axes, N/mm) and each layer's 2nd Piola–Kirchhoff stress (xx, yy, xy, MPa).
 pub fn sheet_frame(model: &Model, state: &State) -> Result<SheetFrame, MaterialError> {
@@ -47,6 +49,10 @@ pub fn sheet_frame(model: &Model, state: &State) -> Result<SheetFrame, MaterialE
             data: FieldData::Vector(state.reactions.iter().map(vector).collect()),
         },
     ];
+    let mut point_data = point_data;
+    if !model.tools.is_empty() {
+        point_data.extend(contact_fields(model, state));
+    }
     let n_layers = model.laminate.layers().len();
     let mut gamma = Vec::with_capacity(model.elements.len());
     let mut warp = Vec::with_capacity(model.elements.len());
@@ -110,4 +116,54 @@ pub fn sheet_frame(model: &Model, state: &State) -> Result<SheetFrame, MaterialE
         point_data,
         cell_data,
     })
+}
+
+/// Contact pressure, status and gaps of every node (see [`sheet_frame`]).
+fn contact_fields(model: &Model, state: &State) -> Vec<Field> {
+    let mut nodal_area = vec![0.0; model.mesh.nodes.len()];
+    for e in &model.elements {
+        for &n in &e.nodes {
+            nodal_area[n] += e.area / 3.0;
+        }
+    }
+    let pressure = state
+        .contacts
+        .iter()
+        .zip(&nodal_area)
+        .map(|(c, a)| c.normal_force.iter().sum::<f64>() / a)
+        .collect();
+    let status = state
+        .contacts
+        .iter()
+        .map(|c| {
+            c.normal_force
+                .iter()
+                .enumerate()
+                .filter(|(_, &f)| f > 0.0)
+                .max_by(|a, b| a.1.total_cmp(b.1))
+                .map_or(0.0, |(k, _)| (k + 1) as f64)
+        })
+        .collect();
+    let mut fields = vec![
+        Field {
+            name: "contact_pressure".into(),
+            data: FieldData::Scalar(pressure),
+        },
+        Field {
+            name: "contact_status".into(),
+            data: FieldData::Scalar(status),
+        },
+    ];
+    for (k, tool) in model.tools.iter().enumerate() {
+        let gaps = state
+            .positions
+            .iter()
+            .map(|x| tool.gap(&(x - state.tool_translations[k]), model.contact.offset))
+            .collect();
+        fields.push(Field {
+            name: format!("gap_{}", tool.name.replace(' ', "_")),
+            data: FieldData::Scalar(gaps),
+        });
+    }
+    fields
 }
