@@ -59,7 +59,7 @@ fn forming(args: &Args) -> anyhow::Result<()> {
     result.outcome.map(|_| ()).map_err(anyhow::Error::from)
 }
 
-const COLUMNS: [&str; 14] = [
+const COLUMNS: [&str; 16] = [
     "time",
     "stroke",
     "punch_force",
@@ -67,6 +67,8 @@ const COLUMNS: [&str; 14] = [
     "holder_travel",
     "draw_in",
     "max_shear_deg",
+    "wrinkle_height",
+    "wrinkle_area",
     "kinetic",
     "internal_work",
     "elastic",
@@ -76,7 +78,7 @@ const COLUMNS: [&str; 14] = [
     "energy_balance_error",
 ];
 
-fn row(r: &FormingRecord) -> [f64; 14] {
+fn row(r: &FormingRecord) -> [f64; 16] {
     let e = &r.energies;
     [
         r.time,
@@ -86,6 +88,8 @@ fn row(r: &FormingRecord) -> [f64; 14] {
         r.holder_travel,
         r.draw_in,
         r.max_shear,
+        r.wrinkles.height,
+        r.wrinkles.area,
         e.kinetic,
         e.internal_work,
         e.elastic,
@@ -170,6 +174,14 @@ fn print_summary(
         (
             "largest shear angle",
             format!("{:.1}°", last.map_or(0.0, |r| r.max_shear)),
+        ),
+        (
+            "flange off the die",
+            format!(
+                "{:.2} mm at most, {:.0} mm^2 lifted by more than half the ply",
+                last.map_or(0.0, |r| r.wrinkles.height),
+                last.map_or(0.0, |r| r.wrinkles.area)
+            ),
         ),
         (
             "draw-in of the edge",

@@ -5,6 +5,6 @@ pub mod run;
 pub mod scenario;
 pub mod setup;
 
-pub use run::{FormingRecord, FormingRun};
+pub use run::{FormingRecord, FormingRun, Wrinkles};
 pub use scenario::{Scenario, ScenarioError};
 pub use setup::FormingModel;

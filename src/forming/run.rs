@@ -25,6 +25,8 @@ pub struct FormingRecord {
     pub draw_in: f64,
     /// Largest shear angle of an element (degrees).
     pub max_shear: f64,
+    /// Wrinkling of the flange ([`Wrinkles`]).
+    pub wrinkles: Wrinkles,
     pub energies: Energies,
 }
 
@@ -40,6 +42,7 @@ pub struct FormingRun {
 struct Recorder<'a, 'p> {
     forming: &'a FormingModel,
     edge: Vec<usize>,
+    nodal_area: Vec<f64>,
     records: Vec<FormingRecord>,
     frames: Option<FrameOutput>,
     progress: Option<&'p mut dyn Progress>,
@@ -58,6 +61,7 @@ impl Observer for Recorder<'_, '_> {
             holder_travel: holder.map_or(0.0, |h| state.tool_translations[h].z),
             draw_in: draw_in(model, state, &self.edge),
             max_shear: max_shear_angle(model, state),
+            wrinkles: flange_wrinkles(f, state, &self.nodal_area),
             energies: state.energies,
         });
         self.steps = state.step;
@@ -88,6 +92,7 @@ pub fn run(
     let mut recorder = Recorder {
         forming,
         edge,
+        nodal_area: nodal_areas(&forming.model),
         records: Vec::new(),
         frames,
         progress,
@@ -104,6 +109,46 @@ pub fn run(
         steps,
         wall_seconds: start.elapsed().as_secs_f64(),
     }
+}
+
+/// Out-of-tool waviness of the flange, the part of the blank that the die's flat face and the
+/// blank holder should keep flat: for each node beyond the flange radius, its face's gap to the
+/// die (MODEL.md §6, "wrinkling: out-of-plane waviness where the sheet does not follow the
+/// tool"). It counts wrinkles and a flange that lifts off the die as a whole alike; telling
+/// them apart (the waviness around the part) is still to come.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Wrinkles {
+    /// Largest gap of a flange node to the die (mm).
+    pub height: f64,
+    /// Area of the flange whose gap exceeds half the ply thickness (mm^2, reference area).
+    pub area: f64,
+}
+
+fn flange_wrinkles(f: &FormingModel, state: &State, nodal_area: &[f64]) -> Wrinkles {
+    let die = &f.model.tools[f.die_tool];
+    let offset = f.model.contact.offset;
+    let translation = state.tool_translations[f.die_tool];
+    state
+        .positions
+        .iter()
+        .zip(nodal_area)
+        .filter(|(x, _)| x.x.hypot(x.y) > f.flange_radius)
+        .map(|(x, &a)| (die.gap(&(x - translation), offset).max(0.0), a))
+        .fold(Wrinkles::default(), |w, (gap, a)| Wrinkles {
+            height: w.height.max(gap),
+            area: w.area + if gap > offset { a } else { 0.0 },
+        })
+}
+
+/// A third of the reference area of each triangle at each of its nodes.
+fn nodal_areas(model: &Model) -> Vec<f64> {
+    let mut area = vec![0.0; model.mesh.nodes.len()];
+    for e in &model.elements {
+        for &n in &e.nodes {
+            area[n] += e.area / 3.0;
+        }
+    }
+    area
 }
 
 /// Nodes on the edge of the blank: those of the edges that belong to one triangle only.

@@ -30,6 +30,8 @@ pub struct FormingModel {
     pub card: MaterialCard,
     pub punch: Crosshead,
     pub settings: SolverSettings,
+    /// Radius beyond which the blank lies on the die's flat face: the flange (mm).
+    pub flange_radius: f64,
     /// Indices of the punch, die and holder (if any) in `model.tools`.
     pub punch_tool: usize,
     pub die_tool: usize,
@@ -97,6 +99,7 @@ impl FormingModel {
             card,
             punch,
             settings,
+            flange_radius: s.tools.die_opening_radius + s.tools.die_fillet_radius,
             punch_tool: 0,
             die_tool: 1,
             holder_tool,
