@@ -132,3 +132,36 @@ fn bad_scenarios_are_refused_with_the_key_named() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("no/such/scenario.toml"));
 }
+
+/// `thermostamp drape` on the example: files written, and a deeper stroke drapes the fabric over
+/// more of the dome, so its largest shear angle is larger.
+#[test]
+fn drape_preview_of_the_example() {
+    let largest = |stroke: &str| {
+        let dir = out_dir(&format!("drape-{stroke}"));
+        let out = thermostamp(&[
+            "drape",
+            "examples/hemisphere.toml",
+            "--set",
+            &format!("process.stroke={stroke}"),
+            "--output",
+            dir.to_str().unwrap(),
+        ]);
+        let stdout = String::from_utf8_lossy(&out.stdout).to_string();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert!(dir.join("drape.csv").exists() && dir.join("drape.vtu").exists());
+        let angle: f64 = stdout
+            .split("largest shear angle ")
+            .nth(1)
+            .and_then(|s| s.split('°').next())
+            .and_then(|s| s.parse().ok())
+            .unwrap_or_else(|| panic!("no angle in: {stdout}"));
+        angle
+    };
+    let (shallow, deep) = (largest("5"), largest("30"));
+    assert!(shallow < deep, "5 mm: {shallow}°, 30 mm: {deep}°");
+}

@@ -4,6 +4,7 @@
 //! 2 bad input (usage, files, values, or a history the material cannot follow). Errors are
 //! one line on standard error.
 
+mod drape;
 mod forming_run;
 mod material_point;
 mod shared;
@@ -35,6 +36,8 @@ enum Command {
     Test(virtual_test::TestCommand),
     /// A thermo-stamping run described by a scenario file (blank, tools, process).
     Run(forming_run::Args),
+    /// Kinematic draping preview of a scenario: the pin-jointed net on the formed punch.
+    Drape(drape::Args),
 }
 
 /// Runs the command line and returns the process exit code.
@@ -50,6 +53,7 @@ pub fn main() -> i32 {
         Command::MaterialPoint(args) => material_point::run(&args),
         Command::Test(command) => virtual_test::run(&command),
         Command::Run(args) => forming_run::run(&args),
+        Command::Drape(args) => drape::run(&args),
     };
     match result {
         Ok(()) => 0,

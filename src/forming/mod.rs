@@ -1,6 +1,7 @@
 //! Thermo-stamping runs (MODEL.md §6): a scenario file, the model it describes (blank, card,
 //! tools), and the run with its histories.
 
+pub mod drape_preview;
 pub mod run;
 pub mod scenario;
 pub mod setup;
