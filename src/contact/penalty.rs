@@ -66,11 +66,11 @@ pub fn evaluate(
     settings: &ContactSettings,
     contacts: &mut [NodeContact],
 ) -> Vec<ToolLoad> {
+    let empty = || vec![ToolLoad::default(); tools.len()];
     contacts
         .par_iter_mut()
         .zip(nodes.par_iter())
-        .map(|(contact, node)| {
-            let mut loads = vec![ToolLoad::default(); tools.len()];
+        .fold(empty, |mut loads, (contact, node)| {
             contact.force = Vector3::zeros();
             contact.tangential.resize(tools.len(), Vector3::zeros());
             contact.normal_force.resize(tools.len(), 0.0);
@@ -79,26 +79,21 @@ pub fn evaluate(
                 let f = node_tool_force(tool, moving, node, dt, settings, contact, k);
                 contact.force += f;
                 if contact.normal_force[k] > 0.0 {
-                    loads[k] = ToolLoad {
-                        force: -f,
-                        normal_force: contact.normal_force[k],
-                        nodes_in_contact: 1,
-                    };
+                    loads[k].force -= f;
+                    loads[k].normal_force += contact.normal_force[k];
+                    loads[k].nodes_in_contact += 1;
                 }
             }
             loads
         })
-        .reduce(
-            || vec![ToolLoad::default(); tools.len()],
-            |mut a, b| {
-                for (x, y) in a.iter_mut().zip(b) {
-                    x.force += y.force;
-                    x.normal_force += y.normal_force;
-                    x.nodes_in_contact += y.nodes_in_contact;
-                }
-                a
-            },
-        )
+        .reduce(empty, |mut a, b| {
+            for (x, y) in a.iter_mut().zip(b) {
+                x.force += y.force;
+                x.normal_force += y.normal_force;
+                x.nodes_in_contact += y.nodes_in_contact;
+            }
+            a
+        })
 }
 
 /// The force of tool `k` on one node; records the node's tangential and normal force.

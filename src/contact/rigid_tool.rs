@@ -45,6 +45,8 @@ pub struct RigidTool {
     pub motion: ToolMotion,
     pub friction: f64,
     grid: SurfaceGrid,
+    /// Centre and radius of a sphere around each triangle, for the full search of [`Self::gap`].
+    spheres: Vec<(Vector3<f64>, f64)>,
 }
 
 impl RigidTool {
@@ -79,12 +81,26 @@ impl RigidTool {
             }
         }
         let grid = SurfaceGrid::new(&surface, search_radius);
+        let spheres = surface
+            .triangles
+            .iter()
+            .map(|t| {
+                let corners = t.map(|i| surface.vertices[i]);
+                let centre = (corners[0] + corners[1] + corners[2]) / 3.0;
+                let radius = corners
+                    .iter()
+                    .map(|c| (c - centre).norm())
+                    .fold(0.0, f64::max);
+                (centre, radius)
+            })
+            .collect();
         Ok(Self {
             name: name.into(),
             surface,
             motion,
             friction,
             grid,
+            spheres,
         })
     }
 
@@ -133,19 +149,23 @@ impl RigidTool {
     /// tool's frame) along the normal of the nearest point of the whole surface, less `offset`.
     /// A full search, for frames, not for every step.
     pub fn gap(&self, p: &Vector3<f64>, offset: f64) -> f64 {
-        self.surface
-            .triangles
-            .iter()
-            .enumerate()
-            .map(|(k, t)| {
-                let [a, b, c] = t.map(|i| self.surface.vertices[i]);
-                let q = closest_point_on_triangle(p, &a, &b, &c);
-                (k, q, (p - q).norm_squared())
-            })
-            .min_by(|x, y| x.2.total_cmp(&y.2))
-            .map_or(f64::INFINITY, |(k, q, _)| {
-                (p - q).dot(&self.surface.normal(k)) - offset
-            })
+        // a triangle whose bounding sphere is farther than the best so far cannot be nearer
+        let mut best: Option<(usize, Vector3<f64>, f64)> = None;
+        for (k, (centre, radius)) in self.spheres.iter().enumerate() {
+            let reach = ((p - centre).norm() - radius).max(0.0);
+            if best.is_some_and(|b| reach * reach >= b.2) {
+                continue;
+            }
+            let [a, b, c] = self.surface.triangles[k].map(|i| self.surface.vertices[i]);
+            let q = closest_point_on_triangle(p, &a, &b, &c);
+            let d2 = (p - q).norm_squared();
+            if best.is_none_or(|b| d2 < b.2) {
+                best = Some((k, q, d2));
+            }
+        }
+        best.map_or(f64::INFINITY, |(k, q, _)| {
+            (p - q).dot(&self.surface.normal(k)) - offset
+        })
     }
 }
 
@@ -153,14 +173,16 @@ impl RigidTool {
 /// by the search radius, overlaps it. A query reads one cell.
 #[derive(Clone, Debug)]
 struct SurfaceGrid {
+    /// Corners of the surface's box grown by the search radius.
     origin: Vector3<f64>,
+    end: Vector3<f64>,
     cell: f64,
     cells: HashMap<[i64; 3], Vec<usize>>,
 }
 
 impl SurfaceGrid {
     fn new(surface: &TriangleSurface, radius: f64) -> Self {
-        let (lo, _) = surface.bounds();
+        let (lo, hi) = surface.bounds();
         let mean_edge = mean_edge_length(surface);
         // cells about the size of a triangle (and of the search radius), so that a cell
         // holds a handful of triangles
@@ -192,12 +214,17 @@ impl SurfaceGrid {
         }
         Self {
             origin,
+            end: hi + Vector3::repeat(radius),
             cell,
             cells,
         }
     }
 
     fn candidates(&self, p: &Vector3<f64>) -> Option<&Vec<usize>> {
+        // most nodes are far from most tools: out of the grid's box, no hashing at all
+        if (0..3).any(|d| p[d] < self.origin[d] || p[d] > self.end[d]) {
+            return None;
+        }
         let key: [i64; 3] =
             std::array::from_fn(|d| ((p[d] - self.origin[d]) / self.cell).floor() as i64);
         self.cells.get(&key)
