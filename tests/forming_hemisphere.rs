@@ -10,13 +10,14 @@ use thermostamp::forming::drape_preview::drape_preview;
 use thermostamp::forming::{run, FormingModel, Scenario};
 use thermostamp::material::fabric::shear_angle;
 
-/// The example with the test fabric, 10 mm cells, 15 mm of stroke at 50 mm/s, no time scaling.
+/// The example with the test fabric, 10 mm cells, 15 mm of stroke at 25 mm/s, no time scaling
+/// (at 50 mm/s the kinetic energy reaches 6 % of the internal energy early in the stroke).
 fn scenario() -> Scenario {
     let overrides = [
         "blank.card=../tests/data/forming-fabric.toml",
         "blank.element_size=10",
         "process.stroke=15",
-        "process.punch_speed=50",
+        "process.punch_speed=25",
         "process.time_scaling=1",
         "output.history_points=20",
     ];
@@ -40,7 +41,7 @@ fn quadrant_maxima(forming: &FormingModel, x: &[Vector3<f64>]) -> [f64; 4] {
     maxima
 }
 
-/// Quadrant maxima of the shear angle within 2° of each other (measured 7.39 to 7.86°: the
+/// Quadrant maxima of the shear angle within 2° of each other (measured 7.40 to 7.85°: the
 /// single diagonals of the mesh are the asymmetry); the largest within 5° of the pin-jointed net
 /// draped on the same cap (`thermostamp drape`, 8.04°); no node deeper in a tool than 10 % of the
 /// ply; kinetic energy below 5 % of the internal energy once the blank carries load.

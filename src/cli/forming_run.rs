@@ -3,8 +3,9 @@
 
 use super::shared::{with_threads, Bar};
 use crate::experiment::sheet_test::FrameOutput;
+use crate::forming::run::shear_angles;
 use crate::forming::{run::FormingRun, FormingModel, FormingRecord, Scenario};
-use crate::io::plot::{write_png, LinePlot, LineStyle, Series};
+use crate::io::plot::{write_map_png, write_png, LinePlot, LineStyle, MapPlot, Series};
 use crate::io::vtk::PvdSeries;
 use crate::io::write_csv;
 use anyhow::Context;
@@ -52,6 +53,14 @@ fn forming(args: &Args) -> anyhow::Result<()> {
         return result.outcome.map(|_| ()).map_err(anyhow::Error::from);
     }
     let mut files = write_outputs(&dir, &result.records)?;
+    if let Ok(state) = &result.outcome {
+        files.push(write_shear_map(
+            &dir,
+            &forming,
+            state,
+            scenario.output.locking_angle,
+        )?);
+    }
     if scenario.output.frames > 0 {
         files.push(dir.join("forming.pvd"));
     }
@@ -128,6 +137,38 @@ fn write_outputs(dir: &Path, records: &[FormingRecord]) -> anyhow::Result<Vec<Pa
 
 /// Fraction of the final internal work from which the kinetic energy is compared with it.
 const KINETIC_CHECK_FROM: f64 = 0.05;
+
+/// `forming-shear-map.png`: the formed part from above, coloured by shear angle.
+fn write_shear_map(
+    dir: &Path,
+    forming: &FormingModel,
+    state: &crate::solver::State,
+    locking_angle: Option<f64>,
+) -> anyhow::Result<PathBuf> {
+    let model = &forming.model;
+    let x = &state.positions;
+    let map = MapPlot {
+        title: "Formed part: shear angle (top view)".into(),
+        value_label: match locking_angle {
+            Some(l) => format!("|shear angle| (°), locking {l}° marked"),
+            None => "|shear angle| (°)".into(),
+        },
+        triangles: model
+            .mesh
+            .triangles
+            .iter()
+            .map(|t| t.map(|n| (x[n].x, x[n].y)))
+            .collect(),
+        values: shear_angles(model, state)
+            .into_iter()
+            .map(f64::abs)
+            .collect(),
+        limit: locking_angle,
+    };
+    let path = dir.join("forming-shear-map.png");
+    write_map_png(&path, &map, 900, 700)?;
+    Ok(path)
+}
 
 fn print_summary(
     scenario: &Scenario,

@@ -182,8 +182,8 @@ fn draw_in(model: &Model, state: &State, edge: &[usize]) -> f64 {
         .fold(0.0, f64::max)
 }
 
-/// Largest shear angle over the elements (degrees).
-pub fn max_shear_angle(model: &Model, state: &State) -> f64 {
+/// Shear angle of every element (degrees, signed).
+pub fn shear_angles(model: &Model, state: &State) -> Vec<f64> {
     model
         .elements
         .iter()
@@ -192,8 +192,15 @@ pub fn max_shear_angle(model: &Model, state: &State) -> f64 {
             let mut c = Matrix3::identity();
             c.fixed_view_mut::<2, 2>(0, 0)
                 .copy_from(&(f.transpose() * f));
-            shear_angle(&c, &e.fibres).abs()
+            shear_angle(&c, &e.fibres).to_degrees()
         })
+        .collect()
+}
+
+/// Largest shear angle over the elements (degrees).
+pub fn max_shear_angle(model: &Model, state: &State) -> f64 {
+    shear_angles(model, state)
+        .into_iter()
+        .map(f64::abs)
         .fold(0.0, f64::max)
-        .to_degrees()
 }

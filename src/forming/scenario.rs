@@ -100,6 +100,9 @@ pub struct Output {
     pub frames: usize,
     #[serde(default = "default_history")]
     pub history_points: usize,
+    /// Locking angle of the fabric (degrees), marked on the shear-angle map; cells beyond it
+    /// are flagged. `None`: no mark.
+    pub locking_angle: Option<f64>,
 }
 
 impl Default for Output {
@@ -108,6 +111,7 @@ impl Default for Output {
             folder: default_folder(),
             frames: default_frames(),
             history_points: default_history(),
+            locking_angle: None,
         }
     }
 }
@@ -271,6 +275,13 @@ impl Scenario {
                  elements across the punch radius are needed",
                 b.element_size, t.punch_radius
             ));
+        }
+        if let Some(angle) = self.output.locking_angle {
+            if !(angle.is_finite() && angle > 0.0 && angle < 90.0) {
+                return Err(format!(
+                    "output.locking_angle = {angle} must lie between 0 and 90 degrees"
+                ));
+            }
         }
         if self.output.history_points == 0 {
             return Err("output.history_points must be at least 1".into());

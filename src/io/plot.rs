@@ -511,6 +511,170 @@ fn emptiest_corner(
     .map_or(SeriesLabelPosition::UpperRight, |(corner, _)| corner)
 }
 
+/// A map of a cell field over a triangulated part seen from above (x–y), each triangle filled
+/// with the colour of its value, with a colour bar; cells beyond `limit` are drawn in the limit
+/// colour (magenta) and the limit is marked on the bar. For the shear angle of a formed part
+/// with the locking angle.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MapPlot {
+    pub title: String,
+    /// Label of the colour bar, with units.
+    pub value_label: String,
+    pub triangles: Vec<[(f64, f64); 3]>,
+    pub values: Vec<f64>,
+    /// Values above this are flagged (e.g. the locking angle); `None`: no flag.
+    pub limit: Option<f64>,
+}
+
+/// Colour of the flagged cells and of the limit's mark.
+const LIMIT_COLOUR: RGBColor = RGBColor(230, 0, 200);
+
+/// Blue (0) through cyan, green and yellow to red (1).
+fn colour_scale(t: f64) -> RGBColor {
+    let stops = [
+        (0.0, (49.0, 54.0, 149.0)),
+        (0.25, (69.0, 160.0, 220.0)),
+        (0.5, (120.0, 200.0, 120.0)),
+        (0.75, (250.0, 210.0, 60.0)),
+        (1.0, (200.0, 30.0, 30.0)),
+    ];
+    let t = if t.is_finite() {
+        t.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let k = stops.iter().rposition(|s| s.0 <= t).unwrap_or(0).min(3);
+    let (t0, c0) = stops[k];
+    let (t1, c1) = stops[k + 1];
+    let w = (t - t0) / (t1 - t0);
+    let mix = |a: f64, b: f64| (a + w * (b - a)).round() as u8;
+    RGBColor(mix(c0.0, c1.0), mix(c0.1, c1.1), mix(c0.2, c1.2))
+}
+
+/// Writes the map as a PNG of `width` x `height` pixels.
+pub fn write_map_png(path: &Path, map: &MapPlot, width: u32, height: u32) -> Result<(), PlotError> {
+    let title = map.title.clone();
+    let finite: Vec<f64> = map
+        .values
+        .iter()
+        .copied()
+        .filter(|v| v.is_finite())
+        .collect();
+    if map.triangles.is_empty() || finite.is_empty() {
+        return Err(PlotError::Empty { title });
+    }
+    if !((MIN_WIDTH..=MAX_SIDE).contains(&width) && (MIN_HEIGHT..=MAX_SIDE).contains(&height)) {
+        return Err(PlotError::Size {
+            title,
+            width,
+            height,
+        });
+    }
+    let font = embedded_font()?;
+    let (fine_width, fine_height) = (SUPERSAMPLE * width, SUPERSAMPLE * height);
+    let mut fine = vec![255u8; 3 * fine_width as usize * fine_height as usize];
+    {
+        let bitmap = BitMapBackend::with_buffer(&mut fine, (fine_width, fine_height));
+        let root = PlotBackend { bitmap, font }.into_drawing_area();
+        draw_map(&root, map, &finite).map_err(|message| PlotError::Draw { title, message })?;
+    }
+    let rgb = downsample(&fine, fine_width as usize, SUPERSAMPLE as usize);
+    encode_png(path, &rgb, width, height)
+}
+
+/// The map on the left (equal scales on x and y), the colour bar on the right.
+fn draw_map(
+    root: &DrawingArea<PlotBackend, Shift>,
+    map: &MapPlot,
+    finite: &[f64],
+) -> Result<(), String> {
+    let (width, height) = root.dim_in_pixel();
+    let scale = (f64::from(width) / DESIGN_SIZE.0).min(f64::from(height) / DESIGN_SIZE.1);
+    let px = |design: f64| (design * scale).round().max(1.0) as u32;
+    let font = |design: f64| (FONT_FAMILY, f64::from(px(design)));
+    root.fill(&WHITE).map_err(|e| e.to_string())?;
+    let top = finite.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let top = map.limit.map_or(top, |l| top.max(l)).max(1e-12);
+    let (left, right) = root.split_horizontally(width * 4 / 5);
+
+    let points = map.triangles.iter().flatten();
+    let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+    for &(x, y) in points {
+        (x0, x1, y0, y1) = (x0.min(x), x1.max(x), y0.min(y), y1.max(y));
+    }
+    // equal scales: pad the shorter side of the box to the drawing area's proportions
+    let (w, h) = left.dim_in_pixel();
+    let aspect = f64::from(w) / f64::from(h);
+    let (cx, cy, mut sx, mut sy) = (0.5 * (x0 + x1), 0.5 * (y0 + y1), x1 - x0, y1 - y0);
+    if sx / sy < aspect {
+        sx = sy * aspect;
+    } else {
+        sy = sx / aspect;
+    }
+    let (sx, sy) = (0.55 * sx, 0.55 * sy);
+    let mut chart = ChartBuilder::on(&left)
+        .caption(&map.title, font(22.0))
+        .margin(px(12.0))
+        .x_label_area_size(px(40.0))
+        .y_label_area_size(px(56.0))
+        .build_cartesian_2d(cx - sx..cx + sx, cy - sy..cy + sy)
+        .map_err(|e| e.to_string())?;
+    chart
+        .configure_mesh()
+        .x_desc("x (mm)")
+        .y_desc("y (mm)")
+        .axis_desc_style(font(16.0))
+        .label_style(font(13.0))
+        .disable_mesh()
+        .draw()
+        .map_err(|e| e.to_string())?;
+    let fill = |v: f64| match map.limit {
+        Some(l) if v > l => LIMIT_COLOUR,
+        _ => colour_scale(v / top),
+    };
+    chart
+        .draw_series(
+            map.triangles
+                .iter()
+                .zip(&map.values)
+                .map(|(t, &v)| Polygon::new(t.to_vec(), fill(v).filled())),
+        )
+        .map_err(|e| e.to_string())?;
+
+    let mut bar = ChartBuilder::on(&right)
+        .margin(px(12.0))
+        .margin_top(px(48.0))
+        .y_label_area_size(px(48.0))
+        .x_label_area_size(px(40.0))
+        .build_cartesian_2d(0.0..1.0, 0.0..top)
+        .map_err(|e| e.to_string())?;
+    bar.configure_mesh()
+        .disable_mesh()
+        .disable_x_axis()
+        .y_desc(&map.value_label)
+        .axis_desc_style(font(16.0))
+        .label_style(font(13.0))
+        .draw()
+        .map_err(|e| e.to_string())?;
+    let steps = 100;
+    bar.draw_series((0..steps).map(|k| {
+        let (a, b) = (
+            top * k as f64 / steps as f64,
+            top * (k + 1) as f64 / steps as f64,
+        );
+        Rectangle::new([(0.0, a), (1.0, b)], fill(0.5 * (a + b)).filled())
+    }))
+    .map_err(|e| e.to_string())?;
+    if let Some(l) = map.limit {
+        bar.draw_series(std::iter::once(PathElement::new(
+            vec![(0.0, l), (1.0, l)],
+            BLACK.stroke_width(px(2.0)),
+        )))
+        .map_err(|e| e.to_string())?;
+    }
+    Ok(())
+}
+
 /// Averages each `factor` x `factor` block of the RGB picture `fine`, `fine_width` pixels wide.
 fn downsample(fine: &[u8], fine_width: usize, factor: usize) -> Vec<u8> {
     let width = fine_width / factor;
