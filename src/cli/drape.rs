@@ -1,9 +1,9 @@
 //! `thermostamp drape scenario.toml`: the kinematic draping preview of a forming scenario, with
 //! a CSV of the cells, a ParaView file of the net and the largest shear angle.
 
+use super::shared::ScenarioArgs;
 use crate::drape::DrapeResult;
 use crate::forming::drape_preview::drape_preview;
-use crate::forming::Scenario;
 use crate::io::vtk::{write_vtu, Field, FieldData, VtuFrame};
 use crate::io::write_csv;
 use anyhow::Context;
@@ -11,22 +11,12 @@ use std::path::{Path, PathBuf};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Scenario file (TOML) of the forming run to preview.
-    scenario: PathBuf,
-    /// Override a scalar of the scenario, as for `thermostamp run` (repeatable).
-    #[arg(long = "set", value_name = "KEY=VALUE")]
-    overrides: Vec<String>,
-    /// Output folder (overrides output.folder).
-    #[arg(long)]
-    output: Option<PathBuf>,
+    #[command(flatten)]
+    scenario: ScenarioArgs,
 }
 
 pub fn run(args: &Args) -> anyhow::Result<()> {
-    let scenario = Scenario::load(&args.scenario, &args.overrides)?;
-    let dir = args
-        .output
-        .clone()
-        .unwrap_or_else(|| scenario.output.folder.clone());
+    let (scenario, dir) = args.scenario.load()?;
     let net = drape_preview(&scenario).map_err(|e| anyhow::anyhow!("drape: {e}"))?;
     std::fs::create_dir_all(&dir)
         .with_context(|| format!("cannot create the output folder {}", dir.display()))?;

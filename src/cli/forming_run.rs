@@ -1,7 +1,7 @@
 //! `thermostamp run scenario.toml`: a thermo-stamping run with CSV history, ParaView frames, a
 //! punch-force plot, a progress bar and a summary table.
 
-use super::shared::{with_threads, Bar};
+use super::shared::{print_table, with_threads, Bar, ScenarioArgs};
 use crate::experiment::sheet_test::FrameOutput;
 use crate::forming::run::shear_angles;
 use crate::forming::{run::FormingRun, FormingModel, FormingRecord, Scenario};
@@ -13,14 +13,8 @@ use std::path::{Path, PathBuf};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Scenario file (TOML): blank, tools, process, output.
-    scenario: PathBuf,
-    /// Override a scalar of the scenario, e.g. --set process.temperature=310 (repeatable).
-    #[arg(long = "set", value_name = "KEY=VALUE")]
-    overrides: Vec<String>,
-    /// Output folder (overrides output.folder).
-    #[arg(long)]
-    output: Option<PathBuf>,
+    #[command(flatten)]
+    scenario: ScenarioArgs,
     /// Worker threads for the element loop (default: all cores).
     #[arg(long)]
     threads: Option<usize>,
@@ -31,11 +25,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
 }
 
 fn forming(args: &Args) -> anyhow::Result<()> {
-    let scenario = Scenario::load(&args.scenario, &args.overrides)?;
-    let dir = args
-        .output
-        .clone()
-        .unwrap_or_else(|| scenario.output.folder.clone());
+    let (scenario, dir) = args.scenario.load()?;
     let forming = FormingModel::new(&scenario).map_err(|e| anyhow::anyhow!(e))?;
     std::fs::create_dir_all(&dir)
         .with_context(|| format!("cannot create the output folder {}", dir.display()))?;
@@ -257,12 +247,5 @@ fn print_summary(
             ),
         ),
     ];
-    println!("{:-<64}", "");
-    for (name, value) in rows {
-        println!("{name:<28}{value}");
-    }
-    println!("{:-<64}", "");
-    for f in files {
-        println!("wrote {}", f.display());
-    }
+    print_table(&rows, files);
 }

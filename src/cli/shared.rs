@@ -1,8 +1,10 @@
 //! What the long-running commands share: the worker-thread pool and the progress bar.
 
 use crate::experiment::sheet_test::Progress;
+use crate::forming::Scenario;
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
+use std::path::PathBuf;
 
 /// Runs `job` on `threads` worker threads (default: all cores).
 pub fn with_threads(
@@ -47,5 +49,43 @@ impl Progress for Bar {
             .set_position((1000.0 * time / self.end_time) as u64);
         self.bar
             .set_message(format!("step {step}, t = {time:.4e} s"));
+    }
+}
+
+/// The summary table of a run, `(name, value)` per row, then the files written.
+pub fn print_table(rows: &[(&str, String)], files: &[PathBuf]) {
+    println!("{:-<64}", "");
+    for (name, value) in rows {
+        println!("{name:<28}{value}");
+    }
+    println!("{:-<64}", "");
+    for f in files {
+        println!("wrote {}", f.display());
+    }
+}
+
+/// What the scenario commands (`run`, `drape`) share: the scenario, its overrides, the output
+/// folder.
+#[derive(clap::Args, Debug)]
+pub struct ScenarioArgs {
+    /// Scenario file (TOML): blank, tools, process, output.
+    scenario: PathBuf,
+    /// Override a scalar of the scenario, e.g. --set process.temperature=310 (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    overrides: Vec<String>,
+    /// Output folder (overrides output.folder).
+    #[arg(long)]
+    output: Option<PathBuf>,
+}
+
+impl ScenarioArgs {
+    /// The checked scenario and the output folder.
+    pub fn load(&self) -> anyhow::Result<(Scenario, PathBuf)> {
+        let scenario = Scenario::load(&self.scenario, &self.overrides)?;
+        let dir = self
+            .output
+            .clone()
+            .unwrap_or_else(|| scenario.output.folder.clone());
+        Ok((scenario, dir))
     }
 }

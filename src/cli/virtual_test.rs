@@ -1,7 +1,7 @@
 //! `thermostamp test ...`: the virtual material tests, with CSV, ParaView and PNG output, a
 //! progress bar and a summary table.
 
-use super::shared::{with_threads, Bar};
+use super::shared::{print_table, with_threads, Bar};
 use crate::experiment::bias_extension::{BiasExtension, BiasRow};
 use crate::experiment::picture_frame::{PictureFrame, PictureFrameRow};
 use crate::experiment::sheet_test::{
@@ -509,14 +509,7 @@ fn print_summary(s: &RunSummary, time_scaling: f64, files: &[PathBuf]) {
             format!("{:.3e}", s.element_steps_per_second()),
         ),
     ];
-    println!("{:-<64}", "");
-    for (name, value) in rows {
-        println!("{name:<28}{value}");
-    }
-    println!("{:-<64}", "");
-    for f in files {
-        println!("wrote {}", f.display());
-    }
+    print_table(&rows, files);
 }
 
 /// `text()` for a figure the run got to, a dash for one a stopped run did not.
