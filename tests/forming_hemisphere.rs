@@ -8,7 +8,6 @@ mod common;
 use nalgebra::Vector3;
 use thermostamp::forming::drape_preview::drape_preview;
 use thermostamp::forming::{run, FormingModel, Scenario};
-use thermostamp::material::fabric::shear_angle;
 
 /// The example with the test fabric, 10 mm cells, 15 mm of stroke at 25 mm/s, no time scaling
 /// (at 50 mm/s the kinetic energy reaches 6 % of the internal energy early in the stroke).
@@ -30,11 +29,7 @@ fn quadrant_maxima(forming: &FormingModel, x: &[Vector3<f64>]) -> [f64; 4] {
     let mut maxima = [0.0f64; 4];
     for e in &forming.model.elements {
         let centroid = e.centroid(x);
-        let f = e.gradient(x);
-        let mut c = nalgebra::Matrix3::identity();
-        c.fixed_view_mut::<2, 2>(0, 0)
-            .copy_from(&(f.transpose() * f));
-        let gamma = shear_angle(&c, &e.fibres).abs().to_degrees();
+        let gamma = e.shear_angle(x).abs().to_degrees();
         let q = usize::from(centroid.x > 0.0) + 2 * usize::from(centroid.y > 0.0);
         maxima[q] = maxima[q].max(gamma);
     }

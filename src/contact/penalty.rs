@@ -47,12 +47,20 @@ pub struct ToolLoad {
     pub nodes_in_contact: usize,
 }
 
-/// The kinematics of a node in a contact evaluation.
+/// The nodes in a contact evaluation: positions (mm), velocities (mm/s), lumped masses (t).
 #[derive(Clone, Copy, Debug)]
-pub struct NodeMotion {
-    pub position: Vector3<f64>,
-    pub velocity: Vector3<f64>,
-    pub mass: f64,
+pub struct Nodes<'a> {
+    pub positions: &'a [Vector3<f64>],
+    pub velocities: &'a [Vector3<f64>],
+    pub masses: &'a [f64],
+}
+
+/// One node's kinematics.
+#[derive(Clone, Copy, Debug)]
+struct NodeMotion {
+    position: Vector3<f64>,
+    velocity: Vector3<f64>,
+    mass: f64,
 }
 
 /// Contact forces on every node for the step `dt` about to be taken, from the tools placed at
@@ -61,7 +69,7 @@ pub struct NodeMotion {
 pub fn evaluate(
     tools: &[RigidTool],
     (translations, tool_velocities): (&[Vector3<f64>], &[Vector3<f64>]),
-    nodes: &[NodeMotion],
+    nodes: Nodes,
     dt: f64,
     settings: &ContactSettings,
     contacts: &mut [NodeContact],
@@ -69,8 +77,13 @@ pub fn evaluate(
     let empty = || vec![ToolLoad::default(); tools.len()];
     contacts
         .par_iter_mut()
-        .zip(nodes.par_iter())
-        .fold(empty, |mut loads, (contact, node)| {
+        .enumerate()
+        .fold(empty, |mut loads, (a, contact)| {
+            let node = &NodeMotion {
+                position: nodes.positions[a],
+                velocity: nodes.velocities[a],
+                mass: nodes.masses[a],
+            };
             contact.force = Vector3::zeros();
             contact.tangential.resize(tools.len(), Vector3::zeros());
             contact.normal_force.resize(tools.len(), 0.0);

@@ -99,6 +99,16 @@ impl MembraneTriangle {
     }
 
     /// Centroid of the current positions.
+    /// Shear angle of the fabric (radians, signed) at the current positions `x`: the change of
+    /// the angle between warp and weft (MODEL.md §3, `I10 = sin^2 gamma`).
+    pub fn shear_angle(&self, x: &[Vector3<f64>]) -> f64 {
+        let f = self.gradient(x);
+        let mut c = Matrix3::identity();
+        c.fixed_view_mut::<2, 2>(0, 0)
+            .copy_from(&(f.transpose() * f));
+        crate::material::fabric::shear_angle(&c, &self.fibres)
+    }
+
     pub fn centroid(&self, x: &[Vector3<f64>]) -> Vector3<f64> {
         self.nodes.iter().map(|&n| x[n]).sum::<Vector3<f64>>() / 3.0
     }

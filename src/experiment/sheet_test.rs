@@ -480,17 +480,9 @@ pub fn clamped_strip_measurement(
 
 /// Mean shear angle (degrees) of the elements listed in `zone`.
 pub fn mean_shear_angle(model: &Model, state: &State, zone: &[usize]) -> f64 {
-    use crate::material::fabric::shear_angle;
     let sum: f64 = zone
         .iter()
-        .map(|&k| {
-            let e = &model.elements[k];
-            let f = e.gradient(&state.positions);
-            let mut c = nalgebra::Matrix3::identity();
-            c.fixed_view_mut::<2, 2>(0, 0)
-                .copy_from(&(f.transpose() * f));
-            shear_angle(&c, &e.fibres)
-        })
+        .map(|&k| model.elements[k].shear_angle(&state.positions))
         .sum();
     (sum / zone.len().max(1) as f64).to_degrees()
 }

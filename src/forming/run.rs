@@ -4,9 +4,8 @@
 
 use super::setup::FormingModel;
 use crate::experiment::sheet_test::{write_frame, FrameOutput, Progress};
-use crate::material::fabric::shear_angle;
 use crate::solver::{self, Energies, Model, Observer, SolverError, State};
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::Vector3;
 use std::time::Instant;
 
 /// One row of the forming history.
@@ -92,7 +91,7 @@ pub fn run(
     let mut recorder = Recorder {
         forming,
         edge,
-        nodal_area: nodal_areas(&forming.model),
+        nodal_area: forming.model.nodal_areas(),
         records: Vec::new(),
         frames,
         progress,
@@ -140,17 +139,6 @@ fn flange_wrinkles(f: &FormingModel, state: &State, nodal_area: &[f64]) -> Wrink
         })
 }
 
-/// A third of the reference area of each triangle at each of its nodes.
-fn nodal_areas(model: &Model) -> Vec<f64> {
-    let mut area = vec![0.0; model.mesh.nodes.len()];
-    for e in &model.elements {
-        for &n in &e.nodes {
-            area[n] += e.area / 3.0;
-        }
-    }
-    area
-}
-
 /// Nodes on the edge of the blank: those of the edges that belong to one triangle only.
 fn boundary_nodes(model: &Model) -> Vec<usize> {
     let mut count = std::collections::HashMap::new();
@@ -187,13 +175,7 @@ pub fn shear_angles(model: &Model, state: &State) -> Vec<f64> {
     model
         .elements
         .iter()
-        .map(|e| {
-            let f = e.gradient(&state.positions);
-            let mut c = Matrix3::identity();
-            c.fixed_view_mut::<2, 2>(0, 0)
-                .copy_from(&(f.transpose() * f));
-            shear_angle(&c, &e.fibres).to_degrees()
-        })
+        .map(|e| e.shear_angle(&state.positions).to_degrees())
         .collect()
 }
 

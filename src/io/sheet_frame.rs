@@ -120,12 +120,7 @@ pub fn sheet_frame(model: &Model, state: &State) -> Result<SheetFrame, MaterialE
 
 /// Contact pressure, status and gaps of every node (see [`sheet_frame`]).
 fn contact_fields(model: &Model, state: &State) -> Vec<Field> {
-    let mut nodal_area = vec![0.0; model.mesh.nodes.len()];
-    for e in &model.elements {
-        for &n in &e.nodes {
-            nodal_area[n] += e.area / 3.0;
-        }
-    }
+    let nodal_area = model.nodal_areas();
     let pressure = state
         .contacts
         .iter()

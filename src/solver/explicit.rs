@@ -12,7 +12,7 @@
 use super::energy::Energies;
 use super::model::{Model, Motion};
 use super::yarn_damping::{step_reduction, yarn_damping_resultant};
-use crate::contact::penalty::{self, NodeContact, NodeMotion, ToolLoad};
+use crate::contact::penalty::{self, NodeContact, Nodes, ToolLoad};
 use crate::element::Bending;
 use crate::material::{LaminateState, MaterialError, MembraneKinematics, MembraneResponse};
 use nalgebra::{Matrix2, Vector3};
@@ -331,17 +331,15 @@ fn tool_contact(model: &Model, state: &mut State, dt: f64) {
             t.velocity(state.time + 0.5 * dt, dt, last)
         })
         .collect();
-    let nodes: Vec<NodeMotion> = (0..state.positions.len())
-        .map(|a| NodeMotion {
-            position: state.positions[a],
-            velocity: state.velocities[a],
-            mass: state.masses[a],
-        })
-        .collect();
+    let nodes = Nodes {
+        positions: &state.positions,
+        velocities: &state.velocities,
+        masses: &state.masses,
+    };
     state.tool_loads = penalty::evaluate(
         &model.tools,
         (&state.tool_translations, &velocities),
-        &nodes,
+        nodes,
         dt,
         &model.contact,
         &mut state.contacts,

@@ -165,4 +165,15 @@ impl Model {
         self.contact = contact;
         self
     }
+
+    /// A third of the reference area of each triangle at each of its nodes (mm^2).
+    pub fn nodal_areas(&self) -> Vec<f64> {
+        let mut area = vec![0.0; self.mesh.nodes.len()];
+        for e in &self.elements {
+            for &n in &e.nodes {
+                area[n] += e.area / 3.0;
+            }
+        }
+        area
+    }
 }
