@@ -8,7 +8,7 @@ pub mod surface;
 pub mod tools;
 
 pub use penalty::{ContactSettings, NodeContact, ToolLoad};
-pub use rigid_tool::{RigidTool, ToolMotion};
+pub use rigid_tool::{NearTriangles, RigidTool, ToolMotion};
 pub use stl::{parse_stl, read_stl, write_stl_ascii, write_stl_binary, StlError};
 pub use surface::{closest_point_on_triangle, Projection, TriangleSurface};
 pub use tools::{

@@ -13,7 +13,7 @@
 //! tool), then scaled back to `mu |f_n|` if it exceeds it (slip). In sliding the friction force
 //! is therefore exactly `mu |f_n|` against the slip direction; in sticking, below it.
 
-use super::rigid_tool::RigidTool;
+use super::rigid_tool::{NearTriangles, RigidTool};
 use nalgebra::Vector3;
 use rayon::prelude::*;
 
@@ -30,12 +30,13 @@ pub struct ContactSettings {
 }
 
 /// What a node does with the tools: its contact force, and per tool the tangential force it
-/// carries and its normal force (0 when not touching).
+/// carries, its normal force (0 when not touching) and the triangles near it.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct NodeContact {
     pub force: Vector3<f64>,
     pub tangential: Vec<Vector3<f64>>,
     pub normal_force: Vec<f64>,
+    pub near: Vec<NearTriangles>,
 }
 
 /// The force of the blank on one tool (N), and how many nodes touch it.
@@ -87,6 +88,7 @@ pub fn evaluate(
             contact.force = Vector3::zeros();
             contact.tangential.resize(tools.len(), Vector3::zeros());
             contact.normal_force.resize(tools.len(), 0.0);
+            contact.near.resize(tools.len(), NearTriangles::default());
             for (k, tool) in tools.iter().enumerate() {
                 let moving = (translations[k], tool_velocities[k]);
                 let f = node_tool_force(tool, moving, node, dt, settings, contact, k);
@@ -121,7 +123,7 @@ fn node_tool_force(
 ) -> Vector3<f64> {
     let local = node.position - translation;
     let gap = tool
-        .nearest(&local)
+        .nearest_listed(&local, &mut contact.near[k])
         .map(|p| (p.normal, (local - p.point).dot(&p.normal) - settings.offset));
     let (normal, gap) = match gap {
         Some((n, g)) if g < 0.0 && g > -settings.max_penetration => (n, g),

@@ -1,5 +1,11 @@
 //! A rigid tool in a run: its surface, how it moves, its friction, and a grid over its
 //! triangles for the nearest-point search.
+//!
+//! In a run a node moves a tiny fraction of a millimetre per step relative to a tool, so each
+//! node keeps the few triangles near it between steps ([`NearTriangles`], a Verlet list): every
+//! triangle within `search_radius + margin` of where the list was made. Until the node has moved
+//! `margin` from there, no other triangle can come within the search radius, and a step reads
+//! the list instead of the grid.
 
 use super::surface::{closest_point_on_triangle, Projection, TriangleSurface};
 use nalgebra::Vector3;
@@ -44,6 +50,7 @@ pub struct RigidTool {
     pub surface: TriangleSurface,
     pub motion: ToolMotion,
     pub friction: f64,
+    search_radius: f64,
     grid: SurfaceGrid,
     /// Centre and radius of a sphere around each triangle, for the full search of [`Self::gap`].
     spheres: Vec<(Vector3<f64>, f64)>,
@@ -80,7 +87,7 @@ impl RigidTool {
                 return Err(format!("tool '{name}': mass = {mass} must be > 0"));
             }
         }
-        let grid = SurfaceGrid::new(&surface, search_radius);
+        let grid = SurfaceGrid::new(&surface, search_radius + list_margin(search_radius));
         let spheres = surface
             .triangles
             .iter()
@@ -99,6 +106,7 @@ impl RigidTool {
             surface,
             motion,
             friction,
+            search_radius,
             grid,
             spheres,
         })
@@ -124,17 +132,46 @@ impl RigidTool {
         }
     }
 
-    /// The nearest point of the surface to `p` (in the tool's frame) among the triangles
-    /// within the search radius; `None` when there is none.
+    /// The nearest point of the surface to `p` (in the tool's frame), if it is within the search
+    /// radius; `None` when no triangle is that near.
     pub fn nearest(&self, p: &Vector3<f64>) -> Option<Projection> {
-        let candidates = self.grid.candidates(p)?;
-        candidates
+        self.nearest_among(p, self.grid.candidates(p).map_or(&[], Vec::as_slice))
+    }
+
+    /// [`Self::nearest`] for a node that keeps its list of near triangles between calls: the
+    /// list is made again only when the node has moved `margin` since it was made.
+    pub fn nearest_listed(&self, p: &Vector3<f64>, near: &mut NearTriangles) -> Option<Projection> {
+        let margin = list_margin(self.search_radius);
+        if near
+            .anchor
+            .is_none_or(|a| (p - a).norm_squared() >= margin * margin)
+        {
+            self.list_near_triangles(p, near);
+        }
+        self.nearest_among(p, &near.triangles)
+    }
+
+    fn list_near_triangles(&self, p: &Vector3<f64>, near: &mut NearTriangles) {
+        let reach = self.search_radius + list_margin(self.search_radius);
+        near.anchor = Some(*p);
+        near.triangles.clear();
+        if let Some(candidates) = self.grid.candidates(p) {
+            near.triangles.extend(
+                candidates
+                    .iter()
+                    .filter(|&&k| (p - self.closest_on(k, p)).norm_squared() <= reach * reach),
+            );
+        }
+    }
+
+    fn nearest_among(&self, p: &Vector3<f64>, triangles: &[usize]) -> Option<Projection> {
+        triangles
             .iter()
             .map(|&k| {
-                let [a, b, c] = self.surface.triangles[k].map(|i| self.surface.vertices[i]);
-                let point = closest_point_on_triangle(p, &a, &b, &c);
+                let point = self.closest_on(k, p);
                 (k, point, (p - point).norm_squared())
             })
+            .filter(|x| x.2 <= self.search_radius * self.search_radius)
             .min_by(|x, y| x.2.total_cmp(&y.2))
             .map(|(triangle, point, _)| Projection {
                 triangle,
@@ -142,6 +179,27 @@ impl RigidTool {
                 normal: self.surface.normal(triangle),
             })
     }
+
+    fn closest_on(&self, k: usize, p: &Vector3<f64>) -> Vector3<f64> {
+        let [a, b, c] = self.surface.triangles[k].map(|i| self.surface.vertices[i]);
+        closest_point_on_triangle(p, &a, &b, &c)
+    }
+}
+
+/// How far (mm) a node may move relative to a tool before its list of near triangles is made
+/// again: the search radius itself **[choice]**. A larger margin lists more triangles, a smaller
+/// one lists them more often; both are cheap next to a grid lookup every step.
+fn list_margin(search_radius: f64) -> f64 {
+    search_radius
+}
+
+/// The triangles of one tool near one node, kept between steps by the node (see the module
+/// documentation). Starts empty: the first query makes it.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct NearTriangles {
+    /// Where the node was (in the tool's frame) when the list was made.
+    anchor: Option<Vector3<f64>>,
+    triangles: Vec<usize>,
 }
 
 impl RigidTool {
@@ -156,8 +214,7 @@ impl RigidTool {
             if best.is_some_and(|b| reach * reach >= b.2) {
                 continue;
             }
-            let [a, b, c] = self.surface.triangles[k].map(|i| self.surface.vertices[i]);
-            let q = closest_point_on_triangle(p, &a, &b, &c);
+            let q = self.closest_on(k, p);
             let d2 = (p - q).norm_squared();
             if best.is_none_or(|b| d2 < b.2) {
                 best = Some((k, q, d2));
@@ -265,6 +322,34 @@ mod tests {
         assert!(tool.nearest(&Vector3::new(0.3, -0.2, 3.0)).is_none());
         assert!((tool.gap(&Vector3::new(0.3, -0.2, 3.0), 0.15) - 2.85).abs() < 1e-12);
         assert!((tool.gap(&Vector3::new(0.0, 0.0, -0.1), 0.15) + 0.25).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_kept_list_finds_what_the_grid_finds_along_a_path() {
+        let punch = crate::contact::hemisphere_punch(10.0, 1.0).unwrap();
+        let tool = RigidTool::new("punch", punch, ToolMotion::Fixed, 0.1, 0.3).unwrap();
+        let mut near = NearTriangles::default();
+        let mut touching = 0;
+        // a spiral hugging the cap, 0.05 mm per step, in and out of the search radius
+        for i in 0..4000 {
+            let s = i as f64 * 0.05;
+            let (theta, phi) = (s / 40.0, s / 7.0);
+            let r = 10.0 + 0.3 * (s / 3.0).sin();
+            let p = Vector3::new(0.0, 0.0, -10.0)
+                + Vector3::new(
+                    theta.sin() * phi.cos(),
+                    theta.sin() * phi.sin(),
+                    theta.cos(),
+                ) * r;
+            let listed = tool.nearest_listed(&p, &mut near);
+            assert_eq!(listed, tool.nearest(&p), "step {i}");
+            if let Some(q) = listed {
+                touching += 1;
+                let full = (p - q.point).dot(&q.normal);
+                assert!((tool.gap(&p, 0.0) - full).abs() < 1e-12, "step {i}");
+            }
+        }
+        assert!(touching > 1000 && touching < 4000, "{touching}");
     }
 
     #[test]
