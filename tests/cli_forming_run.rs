@@ -1,6 +1,6 @@
-//! `thermostamp run` as a user runs it: the bundled hemisphere example in a reduced form (the
-//! CI check that keeps it from rotting), and bad scenarios refused with exit code 2 and one
-//! line naming the key or the file.
+//! `thermostamp run` as a user runs it: the bundled hemisphere and double-dome examples in a
+//! reduced form (the CI check that keeps them from rotting), and bad scenarios refused with
+//! exit code 2 and one line naming the key or the file.
 
 mod common;
 
@@ -73,6 +73,55 @@ fn hemisphere_example_runs_in_reduced_form() {
     assert!(force.last().unwrap() > &force[force.len() / 2]);
 }
 
+/// The double-dome example on 10 mm cells, 6 mm of stroke, a larger mass-scaling step: it
+/// reaches the stroke with the holder at its force, and its drape preview runs.
+#[test]
+fn double_dome_example_runs_in_reduced_form() {
+    let dir = out_dir("forming-double-dome");
+    let out = thermostamp(&[
+        "run",
+        "examples/double-dome.toml",
+        "--set",
+        "blank.element_size=10",
+        "--set",
+        "process.stroke=6",
+        "--set",
+        "process.target_time_step=5e-6",
+        "--set",
+        "output.frames=1",
+        "--output",
+        dir.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.contains("stroke reached              6.00 mm"),
+        "{stdout}"
+    );
+    for file in ["forming.csv", "forming-shear-map.png", "forming_0001.vtu"] {
+        assert!(dir.join(file).exists(), "{file} missing");
+    }
+    let csv = std::fs::read_to_string(dir.join("forming.csv")).unwrap();
+    let last: Vec<f64> = csv
+        .lines()
+        .last()
+        .unwrap()
+        .split(',')
+        .map(|v| v.parse().unwrap())
+        .collect();
+    assert!((last[3] - 300.0).abs() < 3.0, "holder force {}", last[3]);
+    let drape_dir = out_dir("drape-double-dome");
+    let out = thermostamp(&[
+        "drape",
+        "examples/double-dome.toml",
+        "--output",
+        drape_dir.to_str().unwrap(),
+    ]);
+    assert!(out.status.success());
+    assert!(drape_dir.join("drape.vtu").exists());
+}
+
 /// Bad scenarios: exit code 2 and the key, line or file named.
 #[test]
 fn bad_scenarios_are_refused_with_the_key_named() {
@@ -103,6 +152,24 @@ fn bad_scenarios_are_refused_with_the_key_named() {
             "punch-too-big",
             example.replace("punch_radius = 40.0", "punch_radius = 45.0"),
             "die_opening_radius",
+        ),
+        (
+            "hemisphere-with-ridge",
+            example.replace(
+                "shape = \"hemisphere\"",
+                "shape = \"hemisphere\"\nhalf_length = 5.0",
+            ),
+            "tools.half_length",
+        ),
+        (
+            "double-dome-without-ridge",
+            example.replace("shape = \"hemisphere\"", "shape = \"double-dome\""),
+            "tools.half_length",
+        ),
+        (
+            "unknown-shape",
+            example.replace("shape = \"hemisphere\"", "shape = \"cup\""),
+            "tools.shape",
         ),
         (
             "negative-force",

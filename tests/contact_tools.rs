@@ -8,8 +8,9 @@ use std::collections::HashMap;
 use std::f64::consts::PI;
 use thermostamp::contact::stl::{parse_stl, write_ascii, write_binary, StlError};
 use thermostamp::contact::{
-    blank_holder, double_dome_punch, hemisphere_die, hemisphere_punch, hemisphere_punch_with_skirt,
-    read_stl, write_stl_ascii, write_stl_binary, TriangleSurface,
+    blank_holder, double_dome_die, double_dome_holder, double_dome_punch, hemisphere_die,
+    hemisphere_punch, hemisphere_punch_with_skirt, read_stl, write_stl_ascii, write_stl_binary,
+    DieShape, TriangleSurface,
 };
 
 const RP: f64 = 50.0;
@@ -543,4 +544,61 @@ proptest! {
     fn ascii_keyword_soup_never_panics(bytes in ascii_soup()) {
         let _ = parse_stl(&bytes, "fuzz.stl");
     }
+}
+
+/// The double-dome die and holder are the hemisphere's profiles swept around the ridge: the
+/// plate faces down, the opening wall faces the ridge, every fillet vertex lies at its torus
+/// distance from the ridge, and the holder's area is the stadium ring's.
+#[test]
+fn double_dome_die_and_holder_follow_the_ridge() {
+    let Die { rd, rf, ro, depth } = DIE;
+    let l = 30.0;
+    let shape = DieShape {
+        opening_radius: rd,
+        fillet_radius: rf,
+        outer_radius: ro,
+        depth,
+    };
+    let die = double_dome_die(l, &shape, 1.0).unwrap();
+    assert_consistently_oriented(&die);
+    let towards_ridge = |c: &Vector3<f64>| Vector3::new(c.x.clamp(-l, l) - c.x, -c.y, 0.0);
+    let ridge_distance = |v: &Vector3<f64>| (v.x.abs() - l).max(0.0).hypot(v.y);
+    let (mut plate, mut wall) = (0, 0);
+    for k in 0..die.triangles.len() {
+        let (c, n) = (centroid(&die, k), die.normal(k));
+        let corners = die.triangles[k].map(|i| die.vertices[i]);
+        if corners.iter().all(|v| v.z == 0.0) {
+            plate += 1;
+            assert!(n.z < -0.999_999, "plate triangle {k}: {n:?}");
+        } else if corners.iter().all(|v| v.z >= rf) {
+            wall += 1;
+            assert!(
+                n.dot(&towards_ridge(&c).normalize()) > 0.99,
+                "wall {k}: {n:?}"
+            );
+        }
+    }
+    assert!(plate > 0 && wall > 0);
+    for v in die.vertices.iter().filter(|v| v.z > 0.0 && v.z < rf) {
+        let rho = ridge_distance(v);
+        assert!(((rho - rd - rf).hypot(v.z - rf) - rf).abs() < 1e-9, "{v:?}");
+    }
+    assert!(die.vertices.iter().all(|v| ridge_distance(v) < ro + 1e-9));
+    assert_eq!(
+        double_dome_die(0.0, &shape, 3.0).unwrap(),
+        hemisphere_die(rd, rf, ro, depth, 3.0).unwrap()
+    );
+
+    let holder = double_dome_holder(l, 55.0, 120.0, 2.0).unwrap();
+    assert_consistently_oriented(&holder);
+    assert!((0..holder.triangles.len()).all(|k| holder.normal(k).z > 0.999_999));
+    let exact = PI * (120.0f64.powi(2) - 55.0f64.powi(2)) + 4.0 * l * (120.0 - 55.0);
+    assert!((area(&holder) - exact).abs() / exact < 2e-3);
+    assert_eq!(
+        double_dome_holder(0.0, 55.0, 120.0, 2.0).unwrap(),
+        blank_holder(55.0, 120.0, 2.0).unwrap()
+    );
+    assert!(double_dome_holder(-1.0, 55.0, 120.0, 2.0)
+        .unwrap_err()
+        .contains("half_length"));
 }

@@ -45,6 +45,9 @@ pub struct ToolLoad {
     pub force: Vector3<f64>,
     /// Sum of the normal forces `|f_n|` (N).
     pub normal_force: f64,
+    /// Sum of the contact springs `k` of the nodes touching the tool (N/mm): what a
+    /// force-driven tool rests on.
+    pub stiffness: f64,
     pub nodes_in_contact: usize,
 }
 
@@ -96,6 +99,7 @@ pub fn evaluate(
                 if contact.normal_force[k] > 0.0 {
                     loads[k].force -= f;
                     loads[k].normal_force += contact.normal_force[k];
+                    loads[k].stiffness += penalty_stiffness(node.mass, dt, settings);
                     loads[k].nodes_in_contact += 1;
                 }
             }
@@ -105,10 +109,16 @@ pub fn evaluate(
             for (x, y) in a.iter_mut().zip(b) {
                 x.force += y.force;
                 x.normal_force += y.normal_force;
+                x.stiffness += y.stiffness;
                 x.nodes_in_contact += y.nodes_in_contact;
             }
             a
         })
+}
+
+/// The contact spring `k = s m / dt^2` of a node of mass `m` (N/mm).
+fn penalty_stiffness(mass: f64, dt: f64, settings: &ContactSettings) -> f64 {
+    settings.penalty_scale * mass / (dt * dt)
 }
 
 /// The force of tool `k` on one node; records the node's tangential and normal force.
@@ -133,7 +143,7 @@ fn node_tool_force(
             return Vector3::zeros();
         }
     };
-    let stiffness = settings.penalty_scale * node.mass / (dt * dt);
+    let stiffness = penalty_stiffness(node.mass, dt, settings);
     let normal_force = -stiffness * gap;
     let slip_velocity = {
         let relative = node.velocity - tool_velocity;

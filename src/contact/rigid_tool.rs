@@ -7,6 +7,7 @@
 //! `margin` from there, no other triangle can come within the search radius, and a step reads
 //! the list instead of the grid.
 
+use super::penalty::ToolLoad;
 use super::surface::{closest_point_on_triangle, Projection, TriangleSurface};
 use nalgebra::Vector3;
 use std::collections::HashMap;
@@ -23,7 +24,10 @@ pub enum ToolMotion {
     Velocity(ToolVelocity),
     /// Pushed by a constant `force` (N), free to move along it, resisted by the blank only: a
     /// blank holder under its blank-holder force. `mass` (tonne) is the tool's inertia in the
-    /// simulation; the blank's mass or more keeps the tool stable on the contact springs.
+    /// simulation; the blank's mass or more keeps the tool stable on the contact springs. Its
+    /// motion is critically damped on those springs, as a press cushion is: undamped, the tool
+    /// rings on the flange (the holder force swinging between 0 and twice its value) and pumps
+    /// kinetic energy into the blank.
     Force {
         force: Vector3<f64>,
         mass: f64,
@@ -112,22 +116,21 @@ impl RigidTool {
         })
     }
 
-    /// The tool's velocity at `t` for a step `dt`, from its velocity over the last step and the
-    /// force of the blank on it (used by a force-driven tool only).
-    pub fn velocity(
-        &self,
-        t: f64,
-        dt: f64,
-        (last, load): (Vector3<f64>, Vector3<f64>),
-    ) -> Vector3<f64> {
+    /// The tool's velocity at `t` for a step `dt`, from its velocity `last` over the last step
+    /// and the `load` of the blank on it (used by a force-driven tool only).
+    pub fn velocity(&self, t: f64, dt: f64, last: Vector3<f64>, load: &ToolLoad) -> Vector3<f64> {
         match &self.motion {
             ToolMotion::Fixed => Vector3::zeros(),
             ToolMotion::Velocity(v) => v(t),
             ToolMotion::Force { force, mass } => {
                 // only along the applied force: a holder slides along the stroke axis
                 let axis = force.normalize();
-                let accelerating = (force + load).dot(&axis) / mass;
-                axis * (last.dot(&axis) + accelerating * dt)
+                let accelerating = (force + load.force).dot(&axis) / mass;
+                // critical damping 2 sqrt(k m) of the tool on the contact springs, taken
+                // implicitly so that it never limits the step
+                let damping = 2.0 * (load.stiffness * mass).sqrt();
+                let v = (last.dot(&axis) + accelerating * dt) / (1.0 + damping * dt / mass);
+                axis * v
             }
         }
     }

@@ -85,28 +85,71 @@ pub fn hemisphere_die(
     depth: f64,
     resolution: f64,
 ) -> Result<TriangleSurface, String> {
-    const TOOL: &str = "hemisphere_die";
-    check_positive(TOOL, "opening_radius", opening_radius)?;
-    check_positive(TOOL, "fillet_radius", fillet_radius)?;
-    check_positive(TOOL, "outer_radius", outer_radius)?;
-    check_positive(TOOL, "depth", depth)?;
-    check_positive(TOOL, "resolution", resolution)?;
+    let die = DieShape {
+        opening_radius,
+        fillet_radius,
+        outer_radius,
+        depth,
+    };
+    stadium_die("hemisphere_die", 0.0, &die, resolution)
+}
+
+/// The sizes of a die's profile: see [`hemisphere_die`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DieShape {
+    pub opening_radius: f64,
+    pub fillet_radius: f64,
+    pub outer_radius: f64,
+    pub depth: f64,
+}
+
+/// Die of the double-dome set-up: the profile of [`hemisphere_die`] swept around the ridge
+/// segment `|x| <= half_length`, `y = 0` of [`double_dome_punch`], so that every distance of
+/// the hemisphere die from its axis becomes a distance from the ridge: a stadium-shaped
+/// opening of radius `opening_radius` about the ridge, its fillet, and a plate out to
+/// `outer_radius` from the ridge. `half_length = 0` gives [`hemisphere_die`].
+pub fn double_dome_die(
+    half_length: f64,
+    die: &DieShape,
+    resolution: f64,
+) -> Result<TriangleSurface, String> {
+    stadium_die("double_dome_die", half_length, die, resolution)
+}
+
+fn stadium_die(
+    tool: &str,
+    half_length: f64,
+    die: &DieShape,
+    resolution: f64,
+) -> Result<TriangleSurface, String> {
+    let DieShape {
+        opening_radius,
+        fillet_radius,
+        outer_radius,
+        depth,
+    } = *die;
+    check_non_negative(tool, "half_length", half_length)?;
+    check_positive(tool, "opening_radius", opening_radius)?;
+    check_positive(tool, "fillet_radius", fillet_radius)?;
+    check_positive(tool, "outer_radius", outer_radius)?;
+    check_positive(tool, "depth", depth)?;
+    check_positive(tool, "resolution", resolution)?;
     if fillet_radius >= opening_radius {
         return Err(format!(
-            "{TOOL}: fillet_radius ({fillet_radius}) must be smaller than opening_radius \
+            "{tool}: fillet_radius ({fillet_radius}) must be smaller than opening_radius \
              ({opening_radius})"
         ));
     }
     if outer_radius <= opening_radius + fillet_radius {
         return Err(format!(
-            "{TOOL}: outer_radius ({outer_radius}) must exceed opening_radius + fillet_radius \
+            "{tool}: outer_radius ({outer_radius}) must exceed opening_radius + fillet_radius \
              ({})",
             opening_radius + fillet_radius
         ));
     }
     if depth <= fillet_radius {
         return Err(format!(
-            "{TOOL}: depth ({depth}) must exceed fillet_radius ({fillet_radius}) so the hole has a \
+            "{tool}: depth ({depth}) must exceed fillet_radius ({fillet_radius}) so the hole has a \
              wall above the fillet"
         ));
     }
@@ -117,7 +160,7 @@ pub fn hemisphere_die(
         depth,
         resolution,
     )?;
-    sweep(TOOL, &profile, 0.0, resolution)
+    sweep(tool, &profile, half_length, resolution)
 }
 
 /// Blank holder: the flat annulus `inner_radius <= r <= outer_radius` in `z = 0`, below the
@@ -128,19 +171,47 @@ pub fn blank_holder(
     outer_radius: f64,
     resolution: f64,
 ) -> Result<TriangleSurface, String> {
-    const TOOL: &str = "blank_holder";
-    check_positive(TOOL, "inner_radius", inner_radius)?;
-    check_positive(TOOL, "outer_radius", outer_radius)?;
-    check_positive(TOOL, "resolution", resolution)?;
+    stadium_holder("blank_holder", 0.0, inner_radius, outer_radius, resolution)
+}
+
+/// Blank holder of the double-dome set-up: the flat ring in `z = 0` between the distances
+/// `inner_radius` and `outer_radius` from the ridge segment `|x| <= half_length`, normal `+z`.
+/// `half_length = 0` gives [`blank_holder`].
+pub fn double_dome_holder(
+    half_length: f64,
+    inner_radius: f64,
+    outer_radius: f64,
+    resolution: f64,
+) -> Result<TriangleSurface, String> {
+    stadium_holder(
+        "double_dome_holder",
+        half_length,
+        inner_radius,
+        outer_radius,
+        resolution,
+    )
+}
+
+fn stadium_holder(
+    tool: &str,
+    half_length: f64,
+    inner_radius: f64,
+    outer_radius: f64,
+    resolution: f64,
+) -> Result<TriangleSurface, String> {
+    check_non_negative(tool, "half_length", half_length)?;
+    check_positive(tool, "inner_radius", inner_radius)?;
+    check_positive(tool, "outer_radius", outer_radius)?;
+    check_positive(tool, "resolution", resolution)?;
     if outer_radius <= inner_radius {
         return Err(format!(
-            "{TOOL}: outer_radius ({outer_radius}) must exceed inner_radius ({inner_radius})"
+            "{tool}: outer_radius ({outer_radius}) must exceed inner_radius ({inner_radius})"
         ));
     }
     // Profile outward: its left normal (-z', r') is then +z (see `sweep`).
     let mut profile = Profile::start(inner_radius, 0.0);
     profile.line_to(outer_radius, 0.0, resolution)?;
-    sweep(TOOL, &profile.points, 0.0, resolution)
+    sweep(tool, &profile.points, half_length, resolution)
 }
 
 /// Double-dome punch, a [choice] simplifying the woven-composites "double dome" benchmark to a
@@ -166,6 +237,13 @@ pub fn double_dome_punch(
     check_positive(TOOL, "resolution", resolution)?;
     let profile = punch_profile(radius, skirt_height, resolution)?;
     sweep(TOOL, &profile, half_length, resolution)
+}
+
+/// Distance of the point `(x, y)` of the blank's plane from the ridge segment `|x| <=
+/// half_length`, `y = 0` (from the axis for `half_length = 0`): the radius along which every
+/// tool of a set is swept.
+pub fn distance_from_ridge(half_length: f64, x: f64, y: f64) -> f64 {
+    (x.abs() - half_length).max(0.0).hypot(y)
 }
 
 fn check_positive(tool: &str, name: &str, value: f64) -> Result<(), String> {

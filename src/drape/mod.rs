@@ -26,7 +26,9 @@ mod surface;
 use nalgebra::{Vector2, Vector3};
 
 pub use result::{CellShear, DrapeResult};
-pub use surface::{finite_difference_gradient, Cylinder, DrapeSurface, Hemisphere, Plane};
+pub use surface::{
+    finite_difference_gradient, Cylinder, DoubleDome, DrapeSurface, Hemisphere, Plane,
+};
 
 /// Largest `max_cells` accepted: (2n+1)² nodes are stored, about 128 MB at this bound.
 pub const MAX_CELLS_LIMIT: usize = 1000;

@@ -126,6 +126,44 @@ impl DrapeSurface for Cylinder {
     }
 }
 
+/// The crown of the double-dome punch (`contact::tools::double_dome_punch`): the points at
+/// distance R above the ridge segment |x| ≤ L, y = 0, z = −R, seen from above:
+/// z = sqrt(R² − d²) − R with d the distance of (x, y) from the ridge, `None` beyond d = R.
+/// A cylinder along x between two quarter spheres; L = 0 is the [`Hemisphere`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DoubleDome {
+    /// Dome radius R (mm).
+    pub radius: f64,
+    /// Half-length L of the ridge (mm).
+    pub half_length: f64,
+}
+
+impl DoubleDome {
+    /// Offset from the nearest ridge point along x: 0 over the cylinder.
+    fn beyond_ridge(&self, x: f64) -> f64 {
+        x.signum() * (x.abs() - self.half_length).max(0.0)
+    }
+}
+
+impl DrapeSurface for DoubleDome {
+    fn height(&self, x: f64, y: f64) -> Option<f64> {
+        if !x.is_finite() {
+            return None;
+        }
+        let dx = self.beyond_ridge(x);
+        circle_sag(self.radius, dx * dx + y * y)
+    }
+
+    fn gradient(&self, x: f64, y: f64) -> Option<(f64, f64)> {
+        if !x.is_finite() {
+            return None;
+        }
+        let dx = self.beyond_ridge(x);
+        let w = circle_half_chord(self.radius, dx * dx + y * y)?;
+        Some((-dx / w, -y / w))
+    }
+}
+
 /// z = sqrt(R² − r²) − R written as −r² / (sqrt(R² − r²) + R), which keeps full relative
 /// precision near the apex where the plain difference cancels.
 fn circle_sag(radius: f64, r2: f64) -> Option<f64> {
@@ -140,4 +178,45 @@ fn circle_half_chord(radius: f64, r2: f64) -> Option<f64> {
     circle_sag(radius, r2)?;
     let w = (radius * radius - r2).sqrt();
     (w > 0.0).then_some(w)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn double_dome_is_a_cylinder_between_two_hemispheres() {
+        let (r, l) = (20.0, 15.0);
+        let dome = DoubleDome {
+            radius: r,
+            half_length: l,
+        };
+        let (sphere, cylinder) = (Hemisphere { radius: r }, Cylinder { radius: r });
+        for &(x, y) in &[
+            (0.0f64, 3.0f64),
+            (14.0, -19.0),
+            (22.0, 5.0),
+            (-30.0, -7.0),
+            (-15.0, 0.0),
+        ] {
+            let expected = if x.abs() <= l {
+                (cylinder.height(x, y), cylinder.gradient(x, y))
+            } else {
+                let dx = x - l * f64::signum(x);
+                (sphere.height(dx, y), sphere.gradient(dx, y))
+            };
+            assert_eq!(
+                (dome.height(x, y), dome.gradient(x, y)),
+                expected,
+                "({x}, {y})"
+            );
+            let fd = finite_difference_gradient(&dome, x, y).unwrap();
+            let g = dome.gradient(x, y).unwrap();
+            assert!(
+                (fd.0 - g.0).abs() < 1e-5 && (fd.1 - g.1).abs() < 1e-5,
+                "({x}, {y})"
+            );
+        }
+        assert_eq!(dome.height(36.0, 0.0), None);
+    }
 }

@@ -3,13 +3,13 @@
 //! with the same shear-angle outputs as a forming run.
 
 use super::scenario::Scenario;
-use crate::drape::{drape, DrapeParams, DrapeResult, DrapeSurface, Hemisphere};
+use crate::drape::{drape, DoubleDome, DrapeParams, DrapeResult, DrapeSurface};
 
-/// The hemispherical punch of the scenario down to the stroke's depth: the part of the dome
-/// the blank is pressed onto (the preview ignores the wall between punch and die).
+/// The punch of the scenario (hemisphere or double dome) down to the stroke's depth: the part
+/// of the dome the blank is pressed onto (the preview ignores the wall between punch and die).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FormedCap {
-    pub dome: Hemisphere,
+    pub dome: DoubleDome,
     /// Depth below the apex where the formed part ends (mm).
     pub depth: f64,
 }
@@ -29,13 +29,14 @@ impl DrapeSurface for FormedCap {
 /// from the punch's apex over the formed cap.
 pub fn drape_preview(s: &Scenario) -> Result<DrapeResult, String> {
     let surface = FormedCap {
-        dome: Hemisphere {
+        dome: DoubleDome {
             radius: s.tools.punch_radius,
+            half_length: s.ridge_half_length(),
         },
         depth: s.process.stroke.min(s.tools.punch_radius),
     };
     let cell = s.blank.element_size;
-    let reach = 0.5 * std::f64::consts::PI * s.tools.punch_radius;
+    let reach = 0.5 * std::f64::consts::PI * s.tools.punch_radius + s.ridge_half_length();
     let params = DrapeParams {
         cell,
         start: (0.0, 0.0),

@@ -131,7 +131,7 @@ fn flange_wrinkles(f: &FormingModel, state: &State, nodal_area: &[f64]) -> Wrink
         .positions
         .iter()
         .zip(nodal_area)
-        .filter(|(x, _)| x.x.hypot(x.y) > f.flange_radius)
+        .filter(|(x, _)| f.in_flange(x))
         .map(|(x, &a)| (die.gap(&(x - translation), offset).max(0.0), a))
         .fold(Wrinkles::default(), |w, (gap, a)| Wrinkles {
             height: w.height.max(gap),

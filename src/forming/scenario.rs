@@ -41,12 +41,16 @@ fn default_pattern() -> DiagonalPattern {
     DiagonalPattern::Right
 }
 
-/// The tool set: a hemispherical punch, a die with a round opening and a flat blank holder.
+/// The tool set: a hemispherical (or double-dome) punch, a die with a round (or stadium-shaped)
+/// opening and a flat blank holder around it (`contact::tools`).
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Tools {
-    /// Only "hemisphere" for now.
+    /// "hemisphere" or "double-dome".
     pub shape: String,
+    /// Double dome only: half-length of the punch's ridge along x (mm). Every radius of the
+    /// tool set is then a distance from the ridge segment `|x| <= half_length`.
+    pub half_length: Option<f64>,
     pub punch_radius: f64,
     pub die_opening_radius: f64,
     pub die_fillet_radius: f64,
@@ -183,6 +187,17 @@ impl Scenario {
         Ok(scenario)
     }
 
+    /// Half-length of the punch's ridge (mm): 0 for the hemisphere.
+    pub fn ridge_half_length(&self) -> f64 {
+        self.tools.half_length.unwrap_or(0.0)
+    }
+
+    /// Distance (mm) of `(x, y)` from the punch's axis (hemisphere) or ridge (double dome):
+    /// the radius that every size of the tool set is measured along.
+    pub fn distance_from_ridge(&self, x: f64, y: f64) -> f64 {
+        crate::contact::distance_from_ridge(self.ridge_half_length(), x, y)
+    }
+
     /// The holder's inner radius.
     pub fn holder_inner_radius(&self) -> f64 {
         self.tools
@@ -207,12 +222,7 @@ impl Scenario {
         ] {
             positive(key, value)?;
         }
-        if t.shape != "hemisphere" {
-            return Err(format!(
-                "tools.shape = \"{}\": the tool sets available are \"hemisphere\"",
-                t.shape
-            ));
-        }
+        self.check_shape()?;
         if !(p.temperature.is_finite()) {
             return Err("process.temperature must be a number".into());
         }
@@ -261,7 +271,7 @@ impl Scenario {
                 t.punch_radius
             ));
         }
-        let half_side = 0.5 * b.width.min(b.length);
+        let half_side = (0.5 * b.width - self.ridge_half_length()).min(0.5 * b.length);
         if p.blank_holder_force > 0.0 && half_side <= holder {
             return Err(format!(
                 "the blank ({} x {} mm) does not reach the blank holder (inner radius {holder} \
@@ -287,6 +297,29 @@ impl Scenario {
             return Err("output.history_points must be at least 1".into());
         }
         Ok(())
+    }
+}
+
+impl Scenario {
+    /// The shape is known, and the ridge's half-length given exactly when it has one.
+    fn check_shape(&self) -> Result<(), String> {
+        match (self.tools.shape.as_str(), self.tools.half_length) {
+            ("hemisphere", None) => Ok(()),
+            ("hemisphere", Some(_)) => Err(
+                "tools.half_length is for tools.shape = \"double-dome\"; a hemisphere has none"
+                    .into(),
+            ),
+            ("double-dome", Some(l)) => positive("tools.half_length", l),
+            ("double-dome", None) => Err(
+                "tools.half_length (the half-length of the ridge, mm) is needed for tools.shape \
+                 = \"double-dome\""
+                    .into(),
+            ),
+            (other, _) => Err(format!(
+                "tools.shape = \"{other}\": the tool sets available are \"hemisphere\" and \
+                 \"double-dome\""
+            )),
+        }
     }
 }
 

@@ -7,8 +7,8 @@
 
 use super::scenario::Scenario;
 use crate::contact::{
-    blank_holder, hemisphere_die, hemisphere_punch, ContactSettings, RigidTool, ToolMotion,
-    TriangleSurface,
+    distance_from_ridge, double_dome_die, double_dome_holder, double_dome_punch, ContactSettings,
+    DieShape, RigidTool, ToolMotion, TriangleSurface,
 };
 use crate::experiment::sheet_test::Crosshead;
 use crate::material::MaterialCard;
@@ -30,8 +30,11 @@ pub struct FormingModel {
     pub card: MaterialCard,
     pub punch: Crosshead,
     pub settings: SolverSettings,
-    /// Radius beyond which the blank lies on the die's flat face: the flange (mm).
+    /// Distance from the punch's ridge (axis) beyond which the blank lies on the die's flat
+    /// face: the flange (mm).
     pub flange_radius: f64,
+    /// Half-length of the punch's ridge (mm); 0 for a hemisphere.
+    pub ridge_half_length: f64,
     /// Indices of the punch, die and holder (if any) in `model.tools`.
     pub punch_tool: usize,
     pub die_tool: usize,
@@ -100,10 +103,18 @@ impl FormingModel {
             punch,
             settings,
             flange_radius: s.tools.die_opening_radius + s.tools.die_fillet_radius,
+            ridge_half_length: s.ridge_half_length(),
             punch_tool: 0,
             die_tool: 1,
             holder_tool,
         })
+    }
+}
+
+impl FormingModel {
+    /// Whether a point of the blank (current position) lies over the die's flat face.
+    pub fn in_flange(&self, x: &Vector3<f64>) -> bool {
+        distance_from_ridge(self.ridge_half_length, x.x, x.y) > self.flange_radius
     }
 }
 
@@ -116,7 +127,8 @@ fn tool_set(
 ) -> Result<(Vec<RigidTool>, Option<usize>), String> {
     let t = &s.tools;
     let half = 0.5 * thickness;
-    let outer = 0.5 * s.blank.width.hypot(s.blank.length) + 10.0;
+    let ridge = s.ridge_half_length();
+    let outer = s.distance_from_ridge(0.5 * s.blank.width, 0.5 * s.blank.length) + 10.0;
     let depth = s.process.stroke + t.die_fillet_radius + 10.0;
     let shifted = |surface: TriangleSurface, dz: f64| TriangleSurface {
         vertices: surface
@@ -126,17 +138,18 @@ fn tool_set(
             .collect(),
         ..surface
     };
-    let punch_surface = shifted(hemisphere_punch(t.punch_radius, t.resolution)?, -half);
-    let die_surface = shifted(
-        hemisphere_die(
-            t.die_opening_radius,
-            t.die_fillet_radius,
-            outer,
-            depth,
-            t.resolution,
-        )?,
-        half,
+    let skirt = t.punch_radius;
+    let punch_surface = shifted(
+        double_dome_punch(ridge, t.punch_radius, skirt, t.resolution)?,
+        -half,
     );
+    let die = DieShape {
+        opening_radius: t.die_opening_radius,
+        fillet_radius: t.die_fillet_radius,
+        outer_radius: outer,
+        depth,
+    };
+    let die_surface = shifted(double_dome_die(ridge, &die, t.resolution)?, half);
     let friction = &s.process.friction;
     let punch_motion = ToolMotion::Velocity(Arc::new(move |time| {
         Vector3::new(0.0, 0.0, punch.velocity(time))
@@ -161,7 +174,7 @@ fn tool_set(
         return Ok((tools, None));
     }
     let holder_surface = shifted(
-        blank_holder(s.holder_inner_radius(), outer, t.resolution)?,
+        double_dome_holder(ridge, s.holder_inner_radius(), outer, t.resolution)?,
         -half,
     );
     let holder_motion = ToolMotion::Force {

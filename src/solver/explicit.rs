@@ -308,8 +308,8 @@ fn advance(
     }
     previous.time_step = dt;
     for (k, tool) in model.tools.iter().enumerate() {
-        let last = (state.tool_velocities[k], state.tool_loads[k].force);
-        state.tool_velocities[k] = tool.velocity(t_half, dt, last);
+        let (last, load) = (state.tool_velocities[k], &state.tool_loads[k]);
+        state.tool_velocities[k] = tool.velocity(t_half, dt, last, load);
         state.tool_translations[k] += state.tool_velocities[k] * dt;
     }
     state.energies.kinetic = kinetic;
@@ -327,8 +327,8 @@ fn tool_contact(model: &Model, state: &mut State, dt: f64) {
         .iter()
         .enumerate()
         .map(|(k, t)| {
-            let last = (state.tool_velocities[k], state.tool_loads[k].force);
-            t.velocity(state.time + 0.5 * dt, dt, last)
+            let (last, load) = (state.tool_velocities[k], &state.tool_loads[k]);
+            t.velocity(state.time + 0.5 * dt, dt, last, load)
         })
         .collect();
     let nodes = Nodes {
