@@ -58,7 +58,7 @@ fn forming(args: &Args) -> anyhow::Result<()> {
     result.outcome.map(|_| ()).map_err(anyhow::Error::from)
 }
 
-const COLUMNS: [&str; 16] = [
+const COLUMNS: [&str; 18] = [
     "time",
     "stroke",
     "punch_force",
@@ -68,6 +68,8 @@ const COLUMNS: [&str; 16] = [
     "max_shear_deg",
     "wrinkle_height",
     "wrinkle_area",
+    "waviness",
+    "wavy_area",
     "kinetic",
     "internal_work",
     "elastic",
@@ -77,7 +79,7 @@ const COLUMNS: [&str; 16] = [
     "energy_balance_error",
 ];
 
-fn row(r: &FormingRecord) -> [f64; 16] {
+fn row(r: &FormingRecord) -> [f64; 18] {
     let e = &r.energies;
     [
         r.time,
@@ -89,6 +91,8 @@ fn row(r: &FormingRecord) -> [f64; 16] {
         r.max_shear,
         r.wrinkles.height,
         r.wrinkles.area,
+        r.wrinkles.waviness,
+        r.wrinkles.wavy_area,
         e.kinetic,
         e.internal_work,
         e.elastic,
@@ -212,6 +216,14 @@ fn print_summary(
                 "{:.2} mm at most, {:.0} mm^2 lifted by more than half the ply",
                 last.map_or(0.0, |r| r.wrinkles.height),
                 last.map_or(0.0, |r| r.wrinkles.area)
+            ),
+        ),
+        (
+            "flange waviness",
+            format!(
+                "{:.2} mm amplitude around the part, over {:.0} mm^2",
+                last.map_or(0.0, |r| r.wrinkles.waviness),
+                last.map_or(0.0, |r| r.wrinkles.wavy_area)
             ),
         ),
         (

@@ -110,32 +110,113 @@ pub fn run(
     }
 }
 
-/// Out-of-tool waviness of the flange, the part of the blank that the die's flat face and the
-/// blank holder should keep flat: for each node beyond the flange radius, its face's gap to the
-/// die (MODEL.md §6, "wrinkling: out-of-plane waviness where the sheet does not follow the
-/// tool"). It counts wrinkles and a flange that lifts off the die as a whole alike; telling
-/// them apart (the waviness around the part) is still to come.
+/// Wrinkling of the flange, the part of the blank that the die's flat face and the blank
+/// holder should keep flat (MODEL.md §6, "wrinkling: out-of-plane waviness where the sheet does
+/// not follow the tool"), from each flange node's gap to the die:
+///
+/// - **lift-off**: the largest gap, and the area lifted by more than half the ply. A flange
+///   that leaves the die as a smooth cone counts here as much as a wavy one.
+/// - **waviness**: the gap's variation *around* the part. Flange nodes are grouped in bands of
+///   one element size by their distance from the punch's ridge (axis); in each band the gap's
+///   trend with that distance (a least-squares line) is taken out, and the waviness is half
+///   the spread of what remains. It is zero for any flange that is the same all around (flat
+///   or coned) and the wave amplitude for a wrinkled one. The wavy area is where a node stands
+///   more than half the ply above the lowest of its band, trend taken out.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Wrinkles {
     /// Largest gap of a flange node to the die (mm).
     pub height: f64,
     /// Area of the flange whose gap exceeds half the ply thickness (mm^2, reference area).
     pub area: f64,
+    /// Largest half spread of the gap around the part within a band (mm).
+    pub waviness: f64,
+    /// Area of the flange more than half the ply above the lowest node of its band (mm^2).
+    pub wavy_area: f64,
 }
 
-fn flange_wrinkles(f: &FormingModel, state: &State, nodal_area: &[f64]) -> Wrinkles {
+/// One flange node: its distance from the ridge, its band, its gap to the die and its area.
+struct FlangeNode {
+    distance: f64,
+    band: usize,
+    gap: f64,
+    area: f64,
+}
+
+/// The gap's least-squares line against the distance from the ridge, in one band.
+#[derive(Clone, Copy, Default)]
+struct BandTrend {
+    n: f64,
+    sum_d: f64,
+    sum_g: f64,
+    sum_dd: f64,
+    sum_dg: f64,
+}
+
+impl BandTrend {
+    fn add(&mut self, d: f64, g: f64) {
+        self.n += 1.0;
+        self.sum_d += d;
+        self.sum_g += g;
+        self.sum_dd += d * d;
+        self.sum_dg += d * g;
+    }
+
+    /// The gap less its trend at distance `d`.
+    fn residual(&self, d: f64, g: f64) -> f64 {
+        let (mean_d, mean_g) = (self.sum_d / self.n, self.sum_g / self.n);
+        let variance = self.sum_dd / self.n - mean_d * mean_d;
+        let covariance = self.sum_dg / self.n - mean_d * mean_g;
+        // nodes all at one distance: no trend to take out
+        let slope = if variance > 1e-12 * (1.0 + mean_d * mean_d) {
+            covariance / variance
+        } else {
+            0.0
+        };
+        g - mean_g - slope * (d - mean_d)
+    }
+}
+
+/// The [`Wrinkles`] of the flange in `state`; `nodal_area` from [`Model::nodal_areas`].
+pub fn flange_wrinkles(f: &FormingModel, state: &State, nodal_area: &[f64]) -> Wrinkles {
     let die = &f.model.tools[f.die_tool];
     let offset = f.model.contact.offset;
     let translation = state.tool_translations[f.die_tool];
-    state
+    let nodes: Vec<FlangeNode> = state
         .positions
         .iter()
         .zip(nodal_area)
         .filter(|(x, _)| f.in_flange(x))
-        .map(|(x, &a)| (die.gap(&(x - translation), offset).max(0.0), a))
-        .fold(Wrinkles::default(), |w, (gap, a)| Wrinkles {
-            height: w.height.max(gap),
-            area: w.area + if gap > offset { a } else { 0.0 },
+        .map(|(x, &area)| FlangeNode {
+            distance: f.distance_from_ridge(x),
+            band: f.flange_band(x),
+            gap: die.gap(&(x - translation), offset).max(0.0),
+            area,
+        })
+        .collect();
+    let bands = nodes.iter().map(|n| n.band + 1).max().unwrap_or(0);
+    let mut trends = vec![BandTrend::default(); bands];
+    for n in &nodes {
+        trends[n.band].add(n.distance, n.gap);
+    }
+    let residuals: Vec<f64> = nodes
+        .iter()
+        .map(|n| trends[n.band].residual(n.distance, n.gap))
+        .collect();
+    let mut lowest = vec![f64::INFINITY; bands];
+    let mut highest = vec![f64::NEG_INFINITY; bands];
+    for (n, &r) in nodes.iter().zip(&residuals) {
+        lowest[n.band] = lowest[n.band].min(r);
+        highest[n.band] = highest[n.band].max(r);
+    }
+    let above_threshold = |gap: f64, area: f64| if gap > offset { area } else { 0.0 };
+    nodes
+        .iter()
+        .zip(&residuals)
+        .fold(Wrinkles::default(), |w, (n, &r)| Wrinkles {
+            height: w.height.max(n.gap),
+            area: w.area + above_threshold(n.gap, n.area),
+            waviness: w.waviness.max(0.5 * (highest[n.band] - lowest[n.band])),
+            wavy_area: w.wavy_area + above_threshold(r - lowest[n.band], n.area),
         })
 }
 

@@ -35,6 +35,8 @@ pub struct FormingModel {
     pub flange_radius: f64,
     /// Half-length of the punch's ridge (mm); 0 for a hemisphere.
     pub ridge_half_length: f64,
+    /// Target element size of the blank (mm).
+    pub element_size: f64,
     /// Indices of the punch, die and holder (if any) in `model.tools`.
     pub punch_tool: usize,
     pub die_tool: usize,
@@ -104,6 +106,7 @@ impl FormingModel {
             settings,
             flange_radius: s.tools.die_opening_radius + s.tools.die_fillet_radius,
             ridge_half_length: s.ridge_half_length(),
+            element_size: s.blank.element_size,
             punch_tool: 0,
             die_tool: 1,
             holder_tool,
@@ -112,9 +115,21 @@ impl FormingModel {
 }
 
 impl FormingModel {
+    /// Distance of a point of the blank from the punch's ridge (axis) in the x-y plane (mm).
+    pub fn distance_from_ridge(&self, x: &Vector3<f64>) -> f64 {
+        distance_from_ridge(self.ridge_half_length, x.x, x.y)
+    }
+
     /// Whether a point of the blank (current position) lies over the die's flat face.
     pub fn in_flange(&self, x: &Vector3<f64>) -> bool {
-        distance_from_ridge(self.ridge_half_length, x.x, x.y) > self.flange_radius
+        self.distance_from_ridge(x) > self.flange_radius
+    }
+
+    /// Which band around the part a flange point lies in: bands one element size wide,
+    /// counted outward from the flange's inner edge (see `run::Wrinkles`).
+    pub fn flange_band(&self, x: &Vector3<f64>) -> usize {
+        let beyond = self.distance_from_ridge(x) - self.flange_radius;
+        (beyond.max(0.0) / self.element_size).floor() as usize
     }
 }
 
