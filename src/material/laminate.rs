@@ -8,6 +8,7 @@
 use super::stress_free_stretch::{find_stress_free_stretch_probed, Evaluation, StressSample};
 use super::{
     FibreDirections, MaterialError, MaterialLaw, PointKinematics, StepModuli, ThicknessRule,
+    ThroughThicknessTangent,
 };
 use nalgebra::{Matrix2, Matrix3, Matrix3x2};
 use std::sync::Arc;
@@ -383,19 +384,25 @@ impl Laminate {
                     Evaluation::SlopeProbe => {
                         let rate = thickness_rate(lambda3, previous, dt);
                         let point = kin.layer_point(lambda3, rate);
-                        Ok(StressSample {
+                        let sample = StressSample {
                             value: law.through_thickness_stress(&point)?,
                             scale: f64::NAN,
-                        })
-                    }
-                    Evaluation::Residual => {
-                        let solution = stress_at(lambda3)?;
-                        let sample = StressSample {
-                            value: solution.s[(2, 2)],
-                            scale: solution.s.fixed_view::<2, 2>(0, 0).amax(),
                         };
-                        last = Some(solution);
-                        Ok(sample)
+                        Ok((sample, None))
+                    }
+                    // With the law's tangent the slope is exact and no probe is needed.
+                    Evaluation::Residual => {
+                        let rate = thickness_rate(lambda3, previous, dt);
+                        let (s, tangent) = law.stress_with_through_thickness_tangent(
+                            &kin.layer_point(lambda3, rate),
+                        )?;
+                        let sample = StressSample {
+                            value: s[(2, 2)],
+                            scale: s.fixed_view::<2, 2>(0, 0).amax(),
+                        };
+                        let slope = tangent.map(|t| thickness_slope(&t, lambda3, rate, dt));
+                        last = Some(LayerSolution { lambda3, rate, s });
+                        Ok((sample, slope))
                     }
                 };
                 let lambda3 =
@@ -414,6 +421,18 @@ impl Laminate {
             }
         }
     }
+}
+
+/// `dS33/dlambda3` along the layer's path: `C33 = lambda3^2` and, with the backward-difference
+/// rate, `Cdot33 = 2 lambda3 (lambda3 - previous) / dt`, whose derivative is
+/// `2 rate + 2 lambda3 / dt` (zero for a step of no duration, where the rate is held at zero).
+fn thickness_slope(tangent: &ThroughThicknessTangent, lambda3: f64, rate: f64, dt: f64) -> f64 {
+    let d_c_dot33 = if dt > 0.0 {
+        2.0 * rate + 2.0 * lambda3 / dt
+    } else {
+        0.0
+    };
+    tangent.wrt_c33 * 2.0 * lambda3 + tangent.wrt_c_dot33 * d_c_dot33
 }
 
 /// Backward-difference thickness rate; zero for a step of no duration.

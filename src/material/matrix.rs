@@ -10,7 +10,7 @@
 
 use super::{
     ensure_finite, MaterialError, MaterialLaw, PointKinematics, StepModuli, TemperatureTable,
-    ThicknessRule,
+    ThicknessRule, ThroughThicknessTangent,
 };
 use nalgebra::Matrix3;
 use std::sync::Arc;
@@ -54,6 +54,9 @@ impl PartialEq for ViscoHyperelasticMatrix {
 struct Invariants {
     i1: f64,
     i3: f64,
+    /// `I3^(-1/3)`, the factor of the deviatoric stress and of its tangent: one `cbrt` per
+    /// evaluation, the costliest operation of the law.
+    i3_pow_minus_third: f64,
 }
 
 impl Invariants {
@@ -63,7 +66,11 @@ impl Invariants {
         if i3.is_nan() || i3 <= 0.0 {
             return Err(MaterialError::NonPositiveVolume { det_c: i3 });
         }
-        Ok(Self { i1: c.trace(), i3 })
+        Ok(Self {
+            i1: c.trace(),
+            i3,
+            i3_pow_minus_third: i3.cbrt().recip(),
+        })
     }
 }
 
@@ -145,7 +152,7 @@ impl ViscoHyperelasticMatrix {
 fn elastic_stress(p: &MatrixParameters, c: &Matrix3<f64>, inv: &Invariants) -> Matrix3<f64> {
     let c_inv = c.try_inverse().unwrap_or_else(Matrix3::zeros);
     let deviatoric =
-        (Matrix3::identity() - c_inv * (inv.i1 / 3.0)) * (2.0 * p.c10 * inv.i3.cbrt().recip());
+        (Matrix3::identity() - c_inv * (inv.i1 / 3.0)) * (2.0 * p.c10 * inv.i3_pow_minus_third);
     let volumetric = c_inv * (2.0 / p.d1 * (inv.i3 - inv.i3.sqrt()));
     deviatoric + volumetric
 }
@@ -155,8 +162,27 @@ fn elastic_stress(p: &MatrixParameters, c: &Matrix3<f64>, inv: &Invariants) -> M
 /// divides the same cofactor by the same determinant), so the two agree to the last bit.
 fn elastic_stress_33(p: &MatrixParameters, c: &Matrix3<f64>, inv: &Invariants) -> f64 {
     let c_inv_33 = (c[(0, 0)] * c[(1, 1)] - c[(1, 0)] * c[(0, 1)]) / inv.i3;
-    let deviatoric = (1.0 - c_inv_33 * (inv.i1 / 3.0)) * (2.0 * p.c10 * inv.i3.cbrt().recip());
+    let deviatoric = (1.0 - c_inv_33 * (inv.i1 / 3.0)) * (2.0 * p.c10 * inv.i3_pow_minus_third);
     let volumetric = c_inv_33 * (2.0 / p.d1 * (inv.i3 - inv.i3.sqrt()));
+    deviatoric + volumetric
+}
+
+/// `dS33/dC33` of seed Eq. (8), the other components of `C` held. With the cofactor
+/// `k = C11 C22 - C12 C21` of `C33`, `c = (C^-1)33 = k / I3` and `J3 = I3^(-1/3)`:
+/// `dI3 = k`, `dI1 = 1`, `dc = -c^2`, `dJ3 = -J3 c / 3`, so
+/// `d(deviatoric) = -(2/3) C10 J3 c (2 - (4/3) c I1)` and
+/// `d(volumetric) = (2/D1) (c k (1 - 1 / (2 sqrt(I3))) - c^2 (I3 - sqrt(I3)))`.
+fn elastic_tangent_33(p: &MatrixParameters, c: &Matrix3<f64>, inv: &Invariants) -> f64 {
+    let k = c[(0, 0)] * c[(1, 1)] - c[(1, 0)] * c[(0, 1)];
+    let c_inv_33 = k / inv.i3;
+    let j = inv.i3.sqrt();
+    let deviatoric = -2.0 / 3.0
+        * p.c10
+        * inv.i3_pow_minus_third
+        * c_inv_33
+        * (2.0 - 4.0 / 3.0 * c_inv_33 * inv.i1);
+    let volumetric =
+        2.0 / p.d1 * (c_inv_33 * k * (1.0 - 0.5 / j) - c_inv_33 * c_inv_33 * (inv.i3 - j));
     deviatoric + volumetric
 }
 
@@ -191,6 +217,24 @@ impl MaterialLaw for ViscoHyperelasticMatrix {
         let inv = Invariants::of(&point.c)?;
         let viscous = point.c_dot[(2, 2)] * (2.0 * p.eta1 * (inv.i1 - 3.0));
         Ok(elastic_stress_33(&p, &point.c, &inv) + viscous)
+    }
+
+    /// The stress of seed Eqs. (8)–(9) with [`elastic_tangent_33`] plus the viscous part of
+    /// the tangent, seed Eq. (9): `dS33/dC33 = 2 eta1 Cdot33` (through `I1`) and
+    /// `dS33/dCdot33 = 2 eta1 (I1 - 3)`; the invariants and parameters are shared.
+    fn stress_with_through_thickness_tangent(
+        &self,
+        point: &PointKinematics,
+    ) -> Result<(Matrix3<f64>, Option<ThroughThicknessTangent>), MaterialError> {
+        ensure_finite(self.name(), point)?;
+        let p = self.parameters_at(point.temperature)?;
+        let inv = Invariants::of(&point.c)?;
+        let s = elastic_stress(&p, &point.c, &inv) + viscous_stress(&p, &point.c_dot, &inv);
+        let tangent = ThroughThicknessTangent {
+            wrt_c33: elastic_tangent_33(&p, &point.c, &inv) + 2.0 * p.eta1 * point.c_dot[(2, 2)],
+            wrt_c_dot33: 2.0 * p.eta1 * (inv.i1 - 3.0),
+        };
+        Ok((s, Some(tangent)))
     }
 
     /// seed Eq. (5): `W_e = C10 (I1bar - 3) + (J - 1)^2 / D1`, `I1bar = J^(-2/3) I1`.

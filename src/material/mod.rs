@@ -121,6 +121,17 @@ pub trait MaterialLaw: Debug + Send + Sync {
         Ok(self.second_piola_kirchhoff(point)?[(2, 2)])
     }
 
+    /// [`MaterialLaw::second_piola_kirchhoff`] with the partial derivatives of `S33` with
+    /// respect to `C33` and to `Cdot33` (the other components held), for the Newton iteration
+    /// of plane stress; `None` when the law does not provide them, and the iteration then
+    /// differences `S33`.
+    fn stress_with_through_thickness_tangent(
+        &self,
+        point: &PointKinematics,
+    ) -> Result<(Matrix3<f64>, Option<ThroughThicknessTangent>), MaterialError> {
+        Ok((self.second_piola_kirchhoff(point)?, None))
+    }
+
     /// Stored (hyperelastic) energy per unit reference volume (MPa); `S_e = 2 dW/dC`.
     fn strain_energy(&self, point: &PointKinematics) -> Result<f64, MaterialError>;
 
@@ -161,6 +172,14 @@ pub trait MaterialLaw: Debug + Send + Sync {
     /// time scaling): rate-dependent parameters change so that the response at the scaled
     /// rate equals the real response at the real rate.
     fn time_scaled(&self, speed_up: f64) -> Arc<dyn MaterialLaw>;
+}
+
+/// `dS33/dC33` (MPa) and `dS33/dCdot33` (MPa·s) at a point, see
+/// [`MaterialLaw::through_thickness_tangent`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ThroughThicknessTangent {
+    pub wrt_c33: f64,
+    pub wrt_c_dot33: f64,
 }
 
 /// The two moduli that set the stable step of an element (see [`MaterialLaw::wave_modulus`]

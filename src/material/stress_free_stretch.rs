@@ -57,14 +57,16 @@ pub fn find_stress_free_stretch(
     guess: f64,
     tolerance: f64,
 ) -> Result<Result<f64, NotConverged>, MaterialError> {
-    find_stress_free_stretch_probed(|lambda, _| stress(lambda), guess, tolerance)
+    find_stress_free_stretch_probed(|lambda, _| Ok((stress(lambda)?, None)), guess, tolerance)
 }
 
-/// [`find_stress_free_stretch`] telling `stress` what each evaluation is for: the same
-/// iteration, for a caller whose slope probe is cheaper than a full sample (the `scale` of a
-/// probe's sample is not read).
+/// [`find_stress_free_stretch`] telling `stress` what each evaluation is for, for a caller
+/// that knows more than the stress: a residual evaluation may return the exact slope
+/// `dstress/dlambda` with its sample, which replaces the finite-difference probe (one stress
+/// evaluation less per iteration); a probe is asked for only when it returns `None`, and the
+/// `scale` of a probe's sample is not read.
 pub fn find_stress_free_stretch_probed(
-    mut stress: impl FnMut(f64, Evaluation) -> Result<StressSample, MaterialError>,
+    mut stress: impl FnMut(f64, Evaluation) -> Result<(StressSample, Option<f64>), MaterialError>,
     guess: f64,
     tolerance: f64,
 ) -> Result<Result<f64, NotConverged>, MaterialError> {
@@ -78,7 +80,7 @@ pub fn find_stress_free_stretch_probed(
     let mut residual = f64::NAN;
     let mut h = SLOPE_STEP * lambda;
     for iteration in 0..MAX_ITERATIONS {
-        let sample = stress(lambda, Evaluation::Residual)?;
+        let (sample, exact_slope) = stress(lambda, Evaluation::Residual)?;
         residual = sample.value;
         if !residual.is_finite() {
             return Ok(Err(NotConverged {
@@ -99,7 +101,10 @@ pub fn find_stress_free_stretch_probed(
             // the root is bracketed to the resolution of lambda
             return Ok(Ok(lambda));
         }
-        let slope = (stress(lambda + h, Evaluation::SlopeProbe)?.value - residual) / h;
+        let slope = match exact_slope {
+            Some(slope) => slope,
+            None => (stress(lambda + h, Evaluation::SlopeProbe)?.0.value - residual) / h,
+        };
         let newton = lambda - residual / slope;
         // A Newton step below the resolution of lambda: the residual is rounding noise.
         if slope > 0.0 && (newton - lambda).abs() <= STEP_RESOLUTION * lambda {
