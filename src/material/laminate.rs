@@ -5,8 +5,11 @@
 //! the last converged step ([`LaminateState`]); the viscous matrix needs the rate because its
 //! through-thickness stress depends on `Cdot33 = 2 lambda3 lambda3dot`.
 
-use super::stress_free_stretch::{find_stress_free_stretch, StressSample};
-use super::{FibreDirections, MaterialError, MaterialLaw, PointKinematics, ThicknessRule};
+use super::stress_free_stretch::{find_stress_free_stretch_probed, Evaluation, StressSample};
+use super::{
+    FibreDirections, MaterialError, MaterialLaw, PointKinematics, StepModuli, ThicknessRule,
+    ThroughThicknessTangent,
+};
 use nalgebra::{Matrix2, Matrix3, Matrix3x2};
 use std::sync::Arc;
 
@@ -225,6 +228,31 @@ impl Laminate {
         self.thickness_mean(kin, state, |law, point| law.viscous_modulus(point))
     }
 
+    /// [`Self::wave_modulus`] and [`Self::viscous_modulus`] in one pass over the layers, the
+    /// same numbers: the explicit solver needs both for every element at every step.
+    pub fn step_moduli(
+        &self,
+        kin: &MembraneKinematics,
+        state: &LaminateState,
+    ) -> Result<StepModuli, MaterialError> {
+        let weighted = self
+            .groups
+            .iter()
+            .try_fold(StepModuli::default(), |sum, group| {
+                let (thickness, point) = self.group_point(group, kin, state);
+                let moduli = self.layers[group[0]].law.step_moduli(&point)?;
+                Ok(StepModuli {
+                    wave: sum.wave + thickness * moduli.wave,
+                    viscous: sum.viscous + thickness * moduli.viscous,
+                })
+            })?;
+        let t0 = self.reference_thickness();
+        Ok(StepModuli {
+            wave: weighted.wave / t0,
+            viscous: weighted.viscous / t0,
+        })
+    }
+
     /// `sum_k t_k f(law_k, point_k) / t0`, each law evaluated once per group of layers.
     fn thickness_mean(
         &self,
@@ -233,13 +261,24 @@ impl Laminate {
         f: impl Fn(&dyn MaterialLaw, &PointKinematics) -> Result<f64, MaterialError>,
     ) -> Result<f64, MaterialError> {
         let weighted = self.groups.iter().try_fold(0.0, |sum, group| {
-            let k = group[0];
-            let point =
-                kin.layer_point(state.thickness_stretch[k], state.thickness_stretch_rate[k]);
-            let thickness: f64 = group.iter().map(|&j| self.layers[j].thickness).sum();
-            Ok(sum + thickness * f(self.layers[k].law.as_ref(), &point)?)
+            let (thickness, point) = self.group_point(group, kin, state);
+            Ok(sum + thickness * f(self.layers[group[0]].law.as_ref(), &point)?)
         })?;
         Ok(weighted / self.reference_thickness())
+    }
+
+    /// A group's total thickness and the kinematics of its first layer, which all its layers
+    /// share in an advanced state.
+    fn group_point(
+        &self,
+        group: &[usize],
+        kin: &MembraneKinematics,
+        state: &LaminateState,
+    ) -> (f64, PointKinematics) {
+        let k = group[0];
+        let point = kin.layer_point(state.thickness_stretch[k], state.thickness_stretch_rate[k]);
+        let thickness: f64 = group.iter().map(|&j| self.layers[j].thickness).sum();
+        (thickness, point)
     }
 
     /// Initial in-plane shear modulus (MPa) in the frame of the yarns: the secant of a simple
@@ -262,11 +301,26 @@ impl Laminate {
     /// The laminate for a process run `speed_up` times faster (MODEL.md §6): every law
     /// time-scaled, layers that shared a law still sharing one.
     pub fn time_scaled(&self, speed_up: f64) -> Self {
+        self.with_laws(|law| law.time_scaled(speed_up))
+    }
+
+    /// The laminate for an isothermal run at `temperature` (see
+    /// [`MaterialLaw::at_temperature`]): the same numbers at that temperature, computed without
+    /// interpolating the parameter tables at every point; other temperatures work as before.
+    pub fn at_temperature(&self, temperature: f64) -> Self {
+        self.with_laws(|law| {
+            law.at_temperature(temperature)
+                .unwrap_or_else(|| Arc::clone(law))
+        })
+    }
+
+    /// Every group's law replaced by `replace(law)`, layers that shared a law still sharing one.
+    fn with_laws(&self, replace: impl Fn(&Arc<dyn MaterialLaw>) -> Arc<dyn MaterialLaw>) -> Self {
         let mut layers = self.layers.clone();
         for group in &self.groups {
-            let scaled = self.layers[group[0]].law.time_scaled(speed_up);
+            let replaced = replace(&self.layers[group[0]].law);
             for &k in group {
-                layers[k].law = scaled.clone();
+                layers[k].law = replaced.clone();
             }
         }
         Self {
@@ -323,33 +377,62 @@ impl Laminate {
         match law.thickness_rule() {
             ThicknessRule::VolumeConserving => stress_at(det_c2.sqrt().recip()),
             ThicknessRule::PlaneStress => {
-                // The last two evaluations (residual and slope probe) may hold the root.
-                let mut recent: [Option<LayerSolution>; 2] = [None, None];
-                let s33 = |lambda3: f64| {
-                    let solution = stress_at(lambda3)?;
-                    let sample = StressSample {
-                        value: solution.s[(2, 2)],
-                        scale: solution.s.fixed_view::<2, 2>(0, 0).amax(),
-                    };
-                    recent.swap(0, 1);
-                    recent[1] = Some(solution);
-                    Ok(sample)
+                // The root is an iterate whose residual was evaluated, normally the last one.
+                let mut last: Option<LayerSolution> = None;
+                let s33 = |lambda3: f64, evaluation| match evaluation {
+                    // The slope probe reads `S33` alone, which the law may compute cheaply.
+                    Evaluation::SlopeProbe => {
+                        let rate = thickness_rate(lambda3, previous, dt);
+                        let point = kin.layer_point(lambda3, rate);
+                        let sample = StressSample {
+                            value: law.through_thickness_stress(&point)?,
+                            scale: f64::NAN,
+                        };
+                        Ok((sample, None))
+                    }
+                    // With the law's tangent the slope is exact and no probe is needed.
+                    Evaluation::Residual => {
+                        let rate = thickness_rate(lambda3, previous, dt);
+                        let (s, tangent) = law.stress_with_through_thickness_tangent(
+                            &kin.layer_point(lambda3, rate),
+                        )?;
+                        let sample = StressSample {
+                            value: s[(2, 2)],
+                            scale: s.fixed_view::<2, 2>(0, 0).amax(),
+                        };
+                        let slope = tangent.map(|t| thickness_slope(&t, lambda3, rate, dt));
+                        last = Some(LayerSolution { lambda3, rate, s });
+                        Ok((sample, slope))
+                    }
                 };
-                let lambda3 = find_stress_free_stretch(s33, previous, PLANE_STRESS_TOLERANCE)?
-                    .map_err(|failure| MaterialError::PlaneStressNotConverged {
-                        layer: k,
-                        law: law.name(),
-                        iterations: failure.iterations,
-                        lambda3: failure.stretch,
-                        s33: failure.residual,
-                    })?;
-                match recent.into_iter().flatten().find(|s| s.lambda3 == lambda3) {
+                let lambda3 =
+                    find_stress_free_stretch_probed(s33, previous, PLANE_STRESS_TOLERANCE)?
+                        .map_err(|failure| MaterialError::PlaneStressNotConverged {
+                            layer: k,
+                            law: law.name(),
+                            iterations: failure.iterations,
+                            lambda3: failure.stretch,
+                            s33: failure.residual,
+                        })?;
+                match last.filter(|s| s.lambda3 == lambda3) {
                     Some(solution) => Ok(solution),
                     None => stress_at(lambda3),
                 }
             }
         }
     }
+}
+
+/// `dS33/dlambda3` along the layer's path: `C33 = lambda3^2` and, with the backward-difference
+/// rate, `Cdot33 = 2 lambda3 (lambda3 - previous) / dt`, whose derivative is
+/// `2 rate + 2 lambda3 / dt` (zero for a step of no duration, where the rate is held at zero).
+fn thickness_slope(tangent: &ThroughThicknessTangent, lambda3: f64, rate: f64, dt: f64) -> f64 {
+    let d_c_dot33 = if dt > 0.0 {
+        2.0 * rate + 2.0 * lambda3 / dt
+    } else {
+        0.0
+    };
+    tangent.wrt_c33 * 2.0 * lambda3 + tangent.wrt_c_dot33 * d_c_dot33
 }
 
 /// Backward-difference thickness rate; zero for a step of no duration.

@@ -9,7 +9,8 @@
 //! State variables: none; the law depends on `C`, `Cdot` and `T` only.
 
 use super::{
-    ensure_finite, MaterialError, MaterialLaw, PointKinematics, TemperatureTable, ThicknessRule,
+    ensure_finite, MaterialError, MaterialLaw, PointKinematics, StepModuli, TemperatureTable,
+    ThicknessRule, ThroughThicknessTangent,
 };
 use nalgebra::Matrix3;
 use std::sync::Arc;
@@ -22,17 +23,40 @@ pub struct MatrixParameters {
     pub eta1: f64,
 }
 
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug)]
 pub struct ViscoHyperelasticMatrix {
     c10: TemperatureTable,
     d1: TemperatureTable,
     eta1: TemperatureTable,
+    /// The parameters interpolated once at the temperature of an isothermal run
+    /// ([`MaterialLaw::at_temperature`]): the tables are otherwise interpolated at every stress
+    /// evaluation, several per element and step in the plane-stress solve. Any other
+    /// temperature is still interpolated, so a varying temperature stays correct.
+    pinned: Option<PinnedParameters>,
+}
+
+/// [`MatrixParameters`] at one temperature, from the same interpolation as any other lookup, so
+/// that using them changes no result.
+#[derive(Clone, Copy, Debug)]
+struct PinnedParameters {
+    temperature: f64,
+    parameters: MatrixParameters,
+}
+
+/// Two matrices are equal when their tables are: the pinned parameters only cache them.
+impl PartialEq for ViscoHyperelasticMatrix {
+    fn eq(&self, other: &Self) -> bool {
+        self.c10 == other.c10 && self.d1 == other.d1 && self.eta1 == other.eta1
+    }
 }
 
 /// Invariants of `C` used by Eqs. (5)–(9).
 struct Invariants {
     i1: f64,
     i3: f64,
+    /// `I3^(-1/3)`, the factor of the deviatoric stress and of its tangent: one `cbrt` per
+    /// evaluation, the costliest operation of the law.
+    i3_pow_minus_third: f64,
 }
 
 impl Invariants {
@@ -42,13 +66,67 @@ impl Invariants {
         if i3.is_nan() || i3 <= 0.0 {
             return Err(MaterialError::NonPositiveVolume { det_c: i3 });
         }
-        Ok(Self { i1: c.trace(), i3 })
+        Ok(Self {
+            i1: c.trace(),
+            i3,
+            i3_pow_minus_third: i3.cbrt().recip(),
+        })
     }
 }
 
 impl ViscoHyperelasticMatrix {
     pub fn new(c10: TemperatureTable, d1: TemperatureTable, eta1: TemperatureTable) -> Self {
-        Self { c10, d1, eta1 }
+        Self {
+            c10,
+            d1,
+            eta1,
+            pinned: None,
+        }
+    }
+
+    /// The same law with its parameters interpolated once at `temperature`; unchanged where the
+    /// tables do not cover it (every evaluation there reports the error, as before).
+    fn pinned_at(mut self, temperature: f64) -> Self {
+        self.pinned = self
+            .interpolate(temperature)
+            .ok()
+            .map(|parameters| PinnedParameters {
+                temperature,
+                parameters,
+            });
+        self
+    }
+
+    /// The pinned parameters when `temperature` is the pinned one.
+    fn pinned(&self, temperature: f64) -> Option<&MatrixParameters> {
+        self.pinned
+            .as_ref()
+            .filter(|p| p.temperature == temperature)
+            .map(|p| &p.parameters)
+    }
+
+    fn interpolate(&self, temperature: f64) -> Result<MatrixParameters, MaterialError> {
+        Ok(MatrixParameters {
+            c10: self.c10.at(temperature)?,
+            d1: self.d1.at(temperature)?,
+            eta1: self.eta1.at(temperature)?,
+        })
+    }
+
+    /// `C10` alone: a temperature inside its table but outside another's is no error here.
+    fn c10_at(&self, temperature: f64) -> Result<f64, MaterialError> {
+        match self.pinned(temperature) {
+            Some(p) => Ok(p.c10),
+            None => self.c10.at(temperature),
+        }
+    }
+
+    /// `eta1` alone, like [`Self::c10_at`].
+    fn eta1_at(&self, temperature: f64) -> Result<f64, MaterialError> {
+        match self.pinned(temperature) {
+            Some(p) => Ok(p.eta1),
+            None => self.eta1.at(temperature),
+        }
     }
 
     /// The temperatures over which all three tables are defined.
@@ -62,11 +140,10 @@ impl ViscoHyperelasticMatrix {
 
     /// `C10`, `D1` and `eta1` interpolated at `temperature`.
     pub fn parameters_at(&self, temperature: f64) -> Result<MatrixParameters, MaterialError> {
-        Ok(MatrixParameters {
-            c10: self.c10.at(temperature)?,
-            d1: self.d1.at(temperature)?,
-            eta1: self.eta1.at(temperature)?,
-        })
+        match self.pinned(temperature) {
+            Some(p) => Ok(*p),
+            None => self.interpolate(temperature),
+        }
     }
 }
 
@@ -75,8 +152,37 @@ impl ViscoHyperelasticMatrix {
 fn elastic_stress(p: &MatrixParameters, c: &Matrix3<f64>, inv: &Invariants) -> Matrix3<f64> {
     let c_inv = c.try_inverse().unwrap_or_else(Matrix3::zeros);
     let deviatoric =
-        (Matrix3::identity() - c_inv * (inv.i1 / 3.0)) * (2.0 * p.c10 * inv.i3.cbrt().recip());
+        (Matrix3::identity() - c_inv * (inv.i1 / 3.0)) * (2.0 * p.c10 * inv.i3_pow_minus_third);
     let volumetric = c_inv * (2.0 / p.d1 * (inv.i3 - inv.i3.sqrt()));
+    deviatoric + volumetric
+}
+
+/// `S33` of [`elastic_stress`] without the rest of the tensor: `(C^-1)33` is the cofactor of
+/// `C33` over `I3`, and every operation is the one the full tensor does (nalgebra's 3x3 inverse
+/// divides the same cofactor by the same determinant), so the two agree to the last bit.
+fn elastic_stress_33(p: &MatrixParameters, c: &Matrix3<f64>, inv: &Invariants) -> f64 {
+    let c_inv_33 = (c[(0, 0)] * c[(1, 1)] - c[(1, 0)] * c[(0, 1)]) / inv.i3;
+    let deviatoric = (1.0 - c_inv_33 * (inv.i1 / 3.0)) * (2.0 * p.c10 * inv.i3_pow_minus_third);
+    let volumetric = c_inv_33 * (2.0 / p.d1 * (inv.i3 - inv.i3.sqrt()));
+    deviatoric + volumetric
+}
+
+/// `dS33/dC33` of seed Eq. (8), the other components of `C` held. With the cofactor
+/// `k = C11 C22 - C12 C21` of `C33`, `c = (C^-1)33 = k / I3` and `J3 = I3^(-1/3)`:
+/// `dI3 = k`, `dI1 = 1`, `dc = -c^2`, `dJ3 = -J3 c / 3`, so
+/// `d(deviatoric) = -(2/3) C10 J3 c (2 - (4/3) c I1)` and
+/// `d(volumetric) = (2/D1) (c k (1 - 1 / (2 sqrt(I3))) - c^2 (I3 - sqrt(I3)))`.
+fn elastic_tangent_33(p: &MatrixParameters, c: &Matrix3<f64>, inv: &Invariants) -> f64 {
+    let k = c[(0, 0)] * c[(1, 1)] - c[(1, 0)] * c[(0, 1)];
+    let c_inv_33 = k / inv.i3;
+    let j = inv.i3.sqrt();
+    let deviatoric = -2.0 / 3.0
+        * p.c10
+        * inv.i3_pow_minus_third
+        * c_inv_33
+        * (2.0 - 4.0 / 3.0 * c_inv_33 * inv.i1);
+    let volumetric =
+        2.0 / p.d1 * (c_inv_33 * k * (1.0 - 0.5 / j) - c_inv_33 * c_inv_33 * (inv.i3 - j));
     deviatoric + volumetric
 }
 
@@ -104,6 +210,33 @@ impl MaterialLaw for ViscoHyperelasticMatrix {
         Ok(elastic_stress(&p, &point.c, &inv) + viscous_stress(&p, &point.c_dot, &inv))
     }
 
+    /// seed Eqs. (8)–(9), the `33` component only.
+    fn through_thickness_stress(&self, point: &PointKinematics) -> Result<f64, MaterialError> {
+        ensure_finite(self.name(), point)?;
+        let p = self.parameters_at(point.temperature)?;
+        let inv = Invariants::of(&point.c)?;
+        let viscous = point.c_dot[(2, 2)] * (2.0 * p.eta1 * (inv.i1 - 3.0));
+        Ok(elastic_stress_33(&p, &point.c, &inv) + viscous)
+    }
+
+    /// The stress of seed Eqs. (8)–(9) with [`elastic_tangent_33`] plus the viscous part of
+    /// the tangent, seed Eq. (9): `dS33/dC33 = 2 eta1 Cdot33` (through `I1`) and
+    /// `dS33/dCdot33 = 2 eta1 (I1 - 3)`; the invariants and parameters are shared.
+    fn stress_with_through_thickness_tangent(
+        &self,
+        point: &PointKinematics,
+    ) -> Result<(Matrix3<f64>, Option<ThroughThicknessTangent>), MaterialError> {
+        ensure_finite(self.name(), point)?;
+        let p = self.parameters_at(point.temperature)?;
+        let inv = Invariants::of(&point.c)?;
+        let s = elastic_stress(&p, &point.c, &inv) + viscous_stress(&p, &point.c_dot, &inv);
+        let tangent = ThroughThicknessTangent {
+            wrt_c33: elastic_tangent_33(&p, &point.c, &inv) + 2.0 * p.eta1 * point.c_dot[(2, 2)],
+            wrt_c_dot33: 2.0 * p.eta1 * (inv.i1 - 3.0),
+        };
+        Ok((s, Some(tangent)))
+    }
+
     /// seed Eq. (5): `W_e = C10 (I1bar - 3) + (J - 1)^2 / D1`, `I1bar = J^(-2/3) I1`.
     fn strain_energy(&self, point: &PointKinematics) -> Result<f64, MaterialError> {
         ensure_finite(self.name(), point)?;
@@ -118,7 +251,7 @@ impl MaterialLaw for ViscoHyperelasticMatrix {
     /// growing roughly with `I1/3`; doubled for safety. The viscous term has its own bound,
     /// [`MaterialLaw::viscous_modulus`].
     fn wave_modulus(&self, point: &PointKinematics) -> Result<f64, MaterialError> {
-        let c10 = self.c10.at(point.temperature)?;
+        let c10 = self.c10_at(point.temperature)?;
         Ok(16.0 * c10 * (point.c.trace() / 3.0).max(1.0))
     }
 
@@ -128,16 +261,36 @@ impl MaterialLaw for ViscoHyperelasticMatrix {
     /// `Edot33 = -(Edot11 + Edot22)`, and the in-plane viscosity is
     /// `eta' [[2, 1], [1, 2]]`: three times `eta'` for equibiaxial stretching.
     fn viscous_modulus(&self, point: &PointKinematics) -> Result<f64, MaterialError> {
-        let eta1 = self.eta1.at(point.temperature)?;
+        let eta1 = self.eta1_at(point.temperature)?;
         Ok(3.0 * 4.0 * eta1 * (point.c.trace() - 3.0).abs())
     }
 
+    /// Both bounds above from one trace of `C`.
+    fn step_moduli(&self, point: &PointKinematics) -> Result<StepModuli, MaterialError> {
+        let c10 = self.c10_at(point.temperature)?;
+        let eta1 = self.eta1_at(point.temperature)?;
+        let i1 = point.c.trace();
+        Ok(StepModuli {
+            wave: 16.0 * c10 * (i1 / 3.0).max(1.0),
+            viscous: 3.0 * 4.0 * eta1 * (i1 - 3.0).abs(),
+        })
+    }
+
     /// MODEL.md §6: `eta1 / s`, so the viscous stress at `s` times the rate is unchanged.
+    /// The pinned parameters are interpolated again from the scaled table, as any lookup is.
     fn time_scaled(&self, speed_up: f64) -> Arc<dyn MaterialLaw> {
-        Arc::new(Self {
+        let scaled = Self {
             eta1: self.eta1.scaled(1.0 / speed_up),
             ..self.clone()
+        };
+        Arc::new(match self.pinned {
+            Some(p) => scaled.pinned_at(p.temperature),
+            None => scaled,
         })
+    }
+
+    fn at_temperature(&self, temperature: f64) -> Option<Arc<dyn MaterialLaw>> {
+        Some(Arc::new(self.clone().pinned_at(temperature)))
     }
 
     /// seed Eq. (6): `psi_v = eta1 J2 (I1 - 3)`, `J2 = tr(Cdot^2) / 2` (Eq. (4)).

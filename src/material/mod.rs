@@ -16,6 +16,7 @@ pub use card::MaterialCard;
 pub use fabric::WovenFabric;
 pub use laminate::{Laminate, LaminateState, Layer, MembraneKinematics, MembraneResponse};
 pub use matrix::ViscoHyperelasticMatrix;
+pub use stress_free_stretch::Evaluation;
 pub use temperature_table::TemperatureTable;
 
 use nalgebra::{Matrix3, Vector3};
@@ -113,6 +114,24 @@ pub trait MaterialLaw: Debug + Send + Sync {
         point: &PointKinematics,
     ) -> Result<Matrix3<f64>, MaterialError>;
 
+    /// The through-thickness component `S33` of [`MaterialLaw::second_piola_kirchhoff`], the
+    /// same number: the plane-stress solve needs only it to probe the slope of `S33`, and a
+    /// law may compute it without the rest of the tensor.
+    fn through_thickness_stress(&self, point: &PointKinematics) -> Result<f64, MaterialError> {
+        Ok(self.second_piola_kirchhoff(point)?[(2, 2)])
+    }
+
+    /// [`MaterialLaw::second_piola_kirchhoff`] with the partial derivatives of `S33` with
+    /// respect to `C33` and to `Cdot33` (the other components held), for the Newton iteration
+    /// of plane stress; `None` when the law does not provide them, and the iteration then
+    /// differences `S33`.
+    fn stress_with_through_thickness_tangent(
+        &self,
+        point: &PointKinematics,
+    ) -> Result<(Matrix3<f64>, Option<ThroughThicknessTangent>), MaterialError> {
+        Ok((self.second_piola_kirchhoff(point)?, None))
+    }
+
     /// Stored (hyperelastic) energy per unit reference volume (MPa); `S_e = 2 dW/dC`.
     fn strain_energy(&self, point: &PointKinematics) -> Result<f64, MaterialError>;
 
@@ -133,10 +152,44 @@ pub trait MaterialLaw: Debug + Send + Sync {
         Ok(0.0)
     }
 
+    /// [`MaterialLaw::wave_modulus`] and [`MaterialLaw::viscous_modulus`] together, as the
+    /// stable step needs both at every step; a law may share the work between them.
+    fn step_moduli(&self, point: &PointKinematics) -> Result<StepModuli, MaterialError> {
+        Ok(StepModuli {
+            wave: self.wave_modulus(point)?,
+            viscous: self.viscous_modulus(point)?,
+        })
+    }
+
+    /// This law for an isothermal run at `temperature`, with what depends on the temperature
+    /// evaluated once instead of at every point; the same numbers at that temperature, and any
+    /// other temperature still evaluated as before. `None` when nothing is gained.
+    fn at_temperature(&self, _temperature: f64) -> Option<Arc<dyn MaterialLaw>> {
+        None
+    }
+
     /// This law for a process run `speed_up` times faster than the real one (MODEL.md §6,
     /// time scaling): rate-dependent parameters change so that the response at the scaled
     /// rate equals the real response at the real rate.
     fn time_scaled(&self, speed_up: f64) -> Arc<dyn MaterialLaw>;
+}
+
+/// `dS33/dC33` (MPa) and `dS33/dCdot33` (MPa·s) at a point, see
+/// [`MaterialLaw::through_thickness_tangent`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ThroughThicknessTangent {
+    pub wrt_c33: f64,
+    pub wrt_c_dot33: f64,
+}
+
+/// The two moduli that set the stable step of an element (see [`MaterialLaw::wave_modulus`]
+/// and [`MaterialLaw::viscous_modulus`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StepModuli {
+    /// Upper bound of the in-plane tangent modulus (MPa).
+    pub wave: f64,
+    /// Upper bound of the tangent viscosity (MPa·s).
+    pub viscous: f64,
 }
 
 /// Cauchy stress `sigma = F S F^T / det F`.

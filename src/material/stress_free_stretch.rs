@@ -31,6 +31,17 @@ pub struct StressSample {
     pub scale: f64,
 }
 
+/// What an evaluation of the stress is for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Evaluation {
+    /// The residual at an iterate: its value and scale decide convergence, and the iterate may
+    /// be the root.
+    Residual,
+    /// The second point of the finite-difference slope: only its value is read, and it is never
+    /// the root, so a caller may compute the stress component alone.
+    SlopeProbe,
+}
+
 /// Finds `lambda > 0` with `stress(lambda).value = 0`, starting from `guess`.
 ///
 /// `stress` must increase with the stretch near the root, as any stable material's
@@ -46,6 +57,19 @@ pub fn find_stress_free_stretch(
     guess: f64,
     tolerance: f64,
 ) -> Result<Result<f64, NotConverged>, MaterialError> {
+    find_stress_free_stretch_probed(|lambda, _| Ok((stress(lambda)?, None)), guess, tolerance)
+}
+
+/// [`find_stress_free_stretch`] telling `stress` what each evaluation is for, for a caller
+/// that knows more than the stress: a residual evaluation may return the exact slope
+/// `dstress/dlambda` with its sample, which replaces the finite-difference probe (one stress
+/// evaluation less per iteration); a probe is asked for only when it returns `None`, and the
+/// `scale` of a probe's sample is not read.
+pub fn find_stress_free_stretch_probed(
+    mut stress: impl FnMut(f64, Evaluation) -> Result<(StressSample, Option<f64>), MaterialError>,
+    guess: f64,
+    tolerance: f64,
+) -> Result<Result<f64, NotConverged>, MaterialError> {
     let mut lambda = if guess.is_finite() && guess > 0.0 {
         guess
     } else {
@@ -56,7 +80,7 @@ pub fn find_stress_free_stretch(
     let mut residual = f64::NAN;
     let mut h = SLOPE_STEP * lambda;
     for iteration in 0..MAX_ITERATIONS {
-        let sample = stress(lambda)?;
+        let (sample, exact_slope) = stress(lambda, Evaluation::Residual)?;
         residual = sample.value;
         if !residual.is_finite() {
             return Ok(Err(NotConverged {
@@ -77,7 +101,10 @@ pub fn find_stress_free_stretch(
             // the root is bracketed to the resolution of lambda
             return Ok(Ok(lambda));
         }
-        let slope = (stress(lambda + h)?.value - residual) / h;
+        let slope = match exact_slope {
+            Some(slope) => slope,
+            None => (stress(lambda + h, Evaluation::SlopeProbe)?.0.value - residual) / h,
+        };
         let newton = lambda - residual / slope;
         // A Newton step below the resolution of lambda: the residual is rounding noise.
         if slope > 0.0 && (newton - lambda).abs() <= STEP_RESOLUTION * lambda {

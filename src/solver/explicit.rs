@@ -14,7 +14,9 @@ use super::model::{Model, Motion};
 use super::yarn_damping::{step_reduction, yarn_damping_resultant};
 use crate::contact::penalty::{self, NodeContact, Nodes, ToolLoad};
 use crate::element::Bending;
-use crate::material::{LaminateState, MaterialError, MembraneKinematics, MembraneResponse};
+use crate::material::{
+    LaminateState, MaterialError, MembraneKinematics, MembraneResponse, StepModuli,
+};
 use nalgebra::{Matrix2, Vector3};
 use rayon::prelude::*;
 
@@ -687,11 +689,11 @@ fn element_loop(
             let response = laminate
                 .membrane_response(&kin, dt, lam_state)
                 .map_err(|err| (k, err))?;
-            let modulus = laminate
-                .wave_modulus(&kin, lam_state)
-                .map_err(|err| (k, err))?;
-            let viscosity = laminate
-                .viscous_modulus(&kin, lam_state)
+            let StepModuli {
+                wave: modulus,
+                viscous: viscosity,
+            } = laminate
+                .step_moduli(&kin, lam_state)
                 .map_err(|err| (k, err))?;
             *membrane = response;
             let element_step = e.altitude * (densities[k] / modulus).sqrt();

@@ -145,7 +145,8 @@ impl Model {
                 penalty_scale: 0.1,
                 max_penetration: laminate.reference_thickness(),
             },
-            laminate,
+            // The run is isothermal: the laws' temperature tables are interpolated once here.
+            laminate: laminate.at_temperature(temperature),
             density,
             temperature,
             constraints,
