@@ -15,7 +15,8 @@ pub struct FormingRecord {
     pub time: f64,
     /// Punch travel (mm).
     pub stroke: f64,
-    /// Force the press puts on the punch along the stroke (N).
+    /// Force the press puts on the punch along the stroke (N), averaged since the last record
+    /// (the load cell's reading: the contact springs ring from step to step).
     pub punch_force: f64,
     /// Normal force between the blank and the holder (N), and the holder's travel (mm).
     pub holder_force: f64,
@@ -46,16 +47,34 @@ struct Recorder<'a, 'p> {
     frames: Option<FrameOutput>,
     progress: Option<&'p mut dyn Progress>,
     steps: usize,
+    /// Time and punch impulse at the last record.
+    last_impulse: Option<(f64, Vector3<f64>)>,
+}
+
+impl Recorder<'_, '_> {
+    /// The punch force averaged since the last record, from the punch's impulse; the
+    /// instantaneous force at the first record.
+    fn mean_punch_force(&mut self, state: &State) -> f64 {
+        let punch = self.forming.punch_tool;
+        let impulse = state.tool_impulses[punch];
+        let mean = match self.last_impulse {
+            Some((time, last)) if state.time > time => (impulse - last) / (state.time - time),
+            _ => state.tool_loads[punch].force,
+        };
+        self.last_impulse = Some((state.time, impulse));
+        -mean.z
+    }
 }
 
 impl Observer for Recorder<'_, '_> {
     fn record(&mut self, model: &Model, state: &State) -> anyhow::Result<()> {
         let f = self.forming;
         let holder = f.holder_tool;
+        let punch_force = self.mean_punch_force(state);
         self.records.push(FormingRecord {
             time: state.time,
             stroke: f.punch.displacement(state.time),
-            punch_force: -state.tool_loads[f.punch_tool].force.z,
+            punch_force,
             holder_force: holder.map_or(0.0, |h| state.tool_loads[h].normal_force),
             holder_travel: holder.map_or(0.0, |h| state.tool_translations[h].z),
             draw_in: draw_in(model, state, &self.edge),
@@ -96,6 +115,7 @@ pub fn run(
         frames,
         progress,
         steps: 0,
+        last_impulse: None,
     };
     let outcome = solver::run(&forming.model, &forming.settings, &mut recorder);
     let steps = match &outcome {

@@ -74,6 +74,10 @@ pub struct State {
     pub tool_velocities: Vec<Vector3<f64>>,
     /// Force of the blank on each tool at the last step (N): minus the punch force etc.
     pub tool_loads: Vec<ToolLoad>,
+    /// Time integral of each tool's load force since the start (N·s): its difference between
+    /// two records over their time apart is the mean force in between, free of the step-to-step
+    /// ringing of the contact springs.
+    pub tool_impulses: Vec<Vector3<f64>>,
     /// Contact of each node with the tools (force on the node, per-tool normal and
     /// tangential forces).
     pub contacts: Vec<NodeContact>,
@@ -222,6 +226,9 @@ pub fn run(
             (dt, settings.damping),
             &mut previous,
         );
+        for (impulse, load) in state.tool_impulses.iter_mut().zip(&state.tool_loads) {
+            *impulse += load.force * dt;
+        }
         if let Some(node) = state
             .positions
             .iter()
@@ -648,6 +655,7 @@ impl State {
             tool_translations: vec![Vector3::zeros(); model.tools.len()],
             tool_velocities: vec![Vector3::zeros(); model.tools.len()],
             tool_loads: vec![ToolLoad::default(); model.tools.len()],
+            tool_impulses: vec![Vector3::zeros(); model.tools.len()],
             contacts: vec![NodeContact::default(); n_nodes],
         })
     }
