@@ -291,6 +291,16 @@ pub struct FrameOutput {
     pub every: usize,
 }
 
+impl FrameOutput {
+    /// Writes the frame of record number `index` (from 0) if it is one of every `every`.
+    pub fn at_record(&mut self, index: usize, model: &Model, state: &State) -> anyhow::Result<()> {
+        if index.is_multiple_of(self.every.max(1)) {
+            write_frame(&mut self.series, model, state)?;
+        }
+        Ok(())
+    }
+}
+
 /// Progress reports while the solver runs (a progress bar in the command line).
 pub trait Progress {
     fn update(&mut self, time: f64, step: usize);
@@ -314,9 +324,7 @@ impl Observer for Recorder<'_, '_> {
         });
         self.steps = state.step;
         if let Some(frames) = &mut self.frames {
-            if index.is_multiple_of(frames.every.max(1)) {
-                write_frame(&mut frames.series, model, state)?;
-            }
+            frames.at_record(index, model, state)?;
         }
         Ok(())
     }

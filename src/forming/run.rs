@@ -3,7 +3,7 @@
 //! shear angle, energies) and ParaView frames.
 
 use super::setup::FormingModel;
-use crate::experiment::sheet_test::{write_frame, FrameOutput, Progress};
+use crate::experiment::sheet_test::{FrameOutput, Progress};
 use crate::solver::{self, Energies, Model, Observer, SolverError, State};
 use nalgebra::Vector3;
 use std::time::Instant;
@@ -84,9 +84,7 @@ impl Observer for Recorder<'_, '_> {
         });
         self.steps = state.step;
         if let Some(frames) = &mut self.frames {
-            if (self.records.len() - 1).is_multiple_of(frames.every.max(1)) {
-                write_frame(&mut frames.series, model, state)?;
-            }
+            frames.at_record(self.records.len() - 1, model, state)?;
         }
         Ok(())
     }
