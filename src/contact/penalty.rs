@@ -2,7 +2,8 @@
 //!
 //! A blank node at `x` meets a tool when its gap to the tool's surface, offset by half the
 //! blank's thickness, is negative: `g = (x - p) . n - t/2 < 0` with `p` the nearest point of the
-//! surface and `n` its normal (towards the blank). The tool then pushes it back with
+//! surface and `n` the unit vector from `p` to `x` (the facet's normal, towards the blank, when
+//! `x` is behind the facet; see `Projection::direction_to`). The tool then pushes it back with
 //! `f_n = -k g n`, `k = s m / dt^2` for a node of mass `m` (the soft constraint of LS-DYNA:
 //! with `s < 1` the contact spring `sqrt(k/m) dt = sqrt(s)` stays within the stable step of
 //! central differences whatever the tool, so contact never shortens the step).
@@ -132,9 +133,10 @@ fn node_tool_force(
     k: usize,
 ) -> Vector3<f64> {
     let local = node.position - translation;
-    let gap = tool
-        .nearest_listed(&local, &mut contact.near[k])
-        .map(|p| (p.normal, (local - p.point).dot(&p.normal) - settings.offset));
+    let gap = tool.nearest_listed(&local, &mut contact.near[k]).map(|p| {
+        let (normal, distance) = p.direction_to(&local);
+        (normal, distance - settings.offset)
+    });
     let (normal, gap) = match gap {
         Some((n, g)) if g < 0.0 && g > -settings.max_penetration => (n, g),
         _ => {

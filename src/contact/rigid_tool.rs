@@ -206,8 +206,9 @@ pub struct NearTriangles {
 }
 
 impl RigidTool {
-    /// Signed gap of a blank face to the surface, for output: the distance from `p` (in the
-    /// tool's frame) along the normal of the nearest point of the whole surface, less `offset`.
+    /// Signed gap of a blank face to the surface, for output: the signed distance of `p` (in the
+    /// tool's frame) to the nearest point of the whole surface (`Projection::direction_to`),
+    /// less `offset`.
     /// A full search, for frames, not for every step.
     pub fn gap(&self, p: &Vector3<f64>, offset: f64) -> f64 {
         // a triangle whose bounding sphere is farther than the best so far cannot be nearer
@@ -224,7 +225,12 @@ impl RigidTool {
             }
         }
         best.map_or(f64::INFINITY, |(k, q, _)| {
-            (p - q).dot(&self.surface.normal(k)) - offset
+            let nearest = Projection {
+                triangle: k,
+                point: q,
+                normal: self.surface.normal(k),
+            };
+            nearest.direction_to(p).1 - offset
         })
     }
 }
@@ -348,7 +354,7 @@ mod tests {
             assert_eq!(listed, tool.nearest(&p), "step {i}");
             if let Some(q) = listed {
                 touching += 1;
-                let full = (p - q.point).dot(&q.normal);
+                let full = q.direction_to(&p).1;
                 assert!((tool.gap(&p, 0.0) - full).abs() < 1e-12, "step {i}");
             }
         }

@@ -21,6 +21,24 @@ pub struct Projection {
     pub normal: Vector3<f64>,
 }
 
+impl Projection {
+    /// The direction from the surface to `x` and the signed distance along it: the unit vector
+    /// from the nearest point to `x` when `x` is on the blank's side, so that over an edge or a
+    /// corner of a faceted convex tool the gap is the true distance, not its component along
+    /// one facet's normal (which would read a node resting on a punch's ridge as a penetration
+    /// of `t/2 (1 - cos)` of half the facet angle); the facet's normal when `x` is behind it.
+    pub fn direction_to(&self, x: &Vector3<f64>) -> (Vector3<f64>, f64) {
+        let d = x - self.point;
+        let along = d.dot(&self.normal);
+        let distance = d.norm();
+        if along > 0.0 && distance > 0.0 {
+            (d / distance, distance)
+        } else {
+            (self.normal, along)
+        }
+    }
+}
+
 impl TriangleSurface {
     /// Unit normal of triangle `k`, towards the blank's side.
     pub fn normal(&self, k: usize) -> Vector3<f64> {
@@ -86,6 +104,23 @@ pub fn closest_point_on_triangle(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn over_an_edge_the_gap_is_the_distance() {
+        // two facets meeting at a ridge along y, each tilted by 0.1 rad
+        let (c, s) = (0.1f64.cos(), 0.1f64.sin());
+        let left = Projection {
+            triangle: 0,
+            point: Vector3::zeros(),
+            normal: Vector3::new(-s, 0.0, c),
+        };
+        let above = Vector3::new(0.0, 0.0, 0.5);
+        let (n, gap) = left.direction_to(&above);
+        assert!((gap - 0.5).abs() < 1e-15 && (n - Vector3::z()).norm() < 1e-15);
+        let behind = Vector3::new(0.0, 0.0, -0.5);
+        let (n, gap) = left.direction_to(&behind);
+        assert!((gap + 0.5 * c).abs() < 1e-15 && n == left.normal);
+    }
 
     #[test]
     fn closest_point_regions_of_a_triangle() {
