@@ -232,3 +232,38 @@ fn drape_preview_of_the_example() {
     let (shallow, deep) = (largest("5"), largest("30"));
     assert!(shallow < deep, "5 mm: {shallow}°, 30 mm: {deep}°");
 }
+
+/// The net's generators from the command line: turned by 45°, the largest shear moves from the
+/// diagonals onto the x axis (it lies at ±45° to the yarns); a start off the punch is an error.
+#[test]
+fn drape_generators_can_be_chosen() {
+    let dir = out_dir("drape-generators");
+    let centre = |extra: &[&str]| {
+        let mut args = vec![
+            "drape",
+            "examples/hemisphere.toml",
+            "--output",
+            dir.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        let out = thermostamp(&args);
+        let stdout = String::from_utf8_lossy(&out.stdout).to_string();
+        assert!(out.status.success(), "{stdout}");
+        let at = stdout
+            .split(") mm")
+            .next()
+            .unwrap()
+            .rsplit('(')
+            .next()
+            .unwrap();
+        let xyz: Vec<f64> = at.split(',').map(|v| v.trim().parse().unwrap()).collect();
+        (xyz[0], xyz[1])
+    };
+    let (x, y) = centre(&[]);
+    assert!((x.abs() - y.abs()).abs() < 1.0, "default: ({x}, {y})");
+    let (x, y) = centre(&["--warp-angle", "45"]);
+    assert!(y.abs() < 1.0 && x.abs() > 20.0, "turned: ({x}, {y})");
+    let out = thermostamp(&["drape", "examples/hemisphere.toml", "--start", "100,0"]);
+    assert_ne!(out.status.code(), Some(0));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("start"));
+}

@@ -7,7 +7,7 @@
 mod common;
 
 use nalgebra::Vector3;
-use thermostamp::forming::drape_preview::drape_preview;
+use thermostamp::forming::drape_preview::{drape_preview, Generators};
 use thermostamp::forming::{run, FormingModel, Scenario};
 
 /// An example with the test fabric, 10 mm cells, 15 mm of stroke at 50 mm/s, no time scaling,
@@ -75,7 +75,7 @@ fn check_against_the_net(scenario: &Scenario) {
     );
     assert!(hi - lo < 2.0, "quadrant maxima {maxima:?}");
     eprintln!("{}: quadrant maxima {maxima:?}", scenario.origin);
-    let net = drape_preview(scenario).unwrap();
+    let net = drape_preview(scenario, &Generators::of(scenario)).unwrap();
     let pin_jointed = net.max_shear().unwrap().shear_deg.abs();
     eprintln!("FE {hi:.2}°, pin-jointed net {pin_jointed:.2}°");
     assert!(

@@ -3,7 +3,7 @@
 
 use super::shared::ScenarioArgs;
 use crate::drape::DrapeResult;
-use crate::forming::drape_preview::drape_preview;
+use crate::forming::drape_preview::{drape_preview, Generators};
 use crate::io::vtk::{write_vtu, Field, FieldData, VtuFrame};
 use crate::io::write_csv;
 use anyhow::Context;
@@ -13,11 +13,35 @@ use std::path::{Path, PathBuf};
 pub struct Args {
     #[command(flatten)]
     scenario: ScenarioArgs,
+    /// Start point of the net in plan, "x,y" in mm (default: the punch's apex, the middle of
+    /// the double dome's ridge).
+    #[arg(long, value_name = "X,Y", value_parser = parse_point)]
+    start: Option<(f64, f64)>,
+    /// Plan angle of the first generator, the warp, from x in degrees (default: the blank's
+    /// ply angle); the weft is the second generator, at +90° in the tangent plane.
+    #[arg(long, value_name = "DEGREES", allow_hyphen_values = true)]
+    warp_angle: Option<f64>,
+}
+
+fn parse_point(text: &str) -> Result<(f64, f64), String> {
+    let numbers: Vec<f64> = text
+        .split(',')
+        .map(|v| v.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|e| format!("'{text}': {e}; expected x,y in mm"))?;
+    match numbers[..] {
+        [x, y] if x.is_finite() && y.is_finite() => Ok((x, y)),
+        _ => Err(format!("'{text}': expected two numbers x,y in mm")),
+    }
 }
 
 pub fn run(args: &Args) -> anyhow::Result<()> {
     let (scenario, dir) = args.scenario.load()?;
-    let net = drape_preview(&scenario).map_err(|e| anyhow::anyhow!("drape: {e}"))?;
+    let generators = Generators {
+        start: args.start.unwrap_or((0.0, 0.0)),
+        warp_angle: args.warp_angle.unwrap_or(scenario.blank.ply_angle),
+    };
+    let net = drape_preview(&scenario, &generators).map_err(|e| anyhow::anyhow!("drape: {e}"))?;
     std::fs::create_dir_all(&dir)
         .with_context(|| format!("cannot create the output folder {}", dir.display()))?;
     let csv = write_cells(&dir, &net)?;

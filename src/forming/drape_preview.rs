@@ -25,9 +25,29 @@ impl DrapeSurface for FormedCap {
     }
 }
 
-/// Drapes the scenario's fabric (cells of the blank's element size, warp at its ply angle)
-/// from the punch's apex over the formed cap.
-pub fn drape_preview(s: &Scenario) -> Result<DrapeResult, String> {
+/// Where the net starts and how it is oriented.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Generators {
+    /// Start point in plan (mm): where the two generators cross.
+    pub start: (f64, f64),
+    /// Plan angle of the warp generator from x (degrees); the weft is at +90°.
+    pub warp_angle: f64,
+}
+
+impl Generators {
+    /// From the punch's apex (the middle of the ridge), warp at the blank's ply angle: the
+    /// net a blank centred on the punch makes.
+    pub fn of(s: &Scenario) -> Self {
+        Self {
+            start: (0.0, 0.0),
+            warp_angle: s.blank.ply_angle,
+        }
+    }
+}
+
+/// Drapes the scenario's fabric (cells of the blank's element size) from the generators'
+/// start over the formed cap.
+pub fn drape_preview(s: &Scenario, generators: &Generators) -> Result<DrapeResult, String> {
     let surface = FormedCap {
         dome: DoubleDome {
             radius: s.tools.punch_radius,
@@ -36,11 +56,13 @@ pub fn drape_preview(s: &Scenario) -> Result<DrapeResult, String> {
         depth: s.process.stroke.min(s.tools.punch_radius),
     };
     let cell = s.blank.element_size;
-    let reach = 0.5 * std::f64::consts::PI * s.tools.punch_radius + s.ridge_half_length();
+    let (x0, y0) = generators.start;
+    let reach =
+        0.5 * std::f64::consts::PI * s.tools.punch_radius + s.ridge_half_length() + x0.hypot(y0);
     let params = DrapeParams {
         cell,
-        start: (0.0, 0.0),
-        warp_angle_deg: s.blank.ply_angle,
+        start: generators.start,
+        warp_angle_deg: generators.warp_angle,
         max_cells: (reach / cell).ceil() as usize + 1,
     };
     drape(&surface, &params)
