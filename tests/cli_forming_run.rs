@@ -172,6 +172,14 @@ fn bad_scenarios_are_refused_with_the_key_named() {
             "tools.shape",
         ),
         (
+            "force-and-gap",
+            example.replace(
+                "blank_holder_force = 200.0",
+                "blank_holder_force = 200.0\nblank_holder_gap = 0.1",
+            ),
+            "blank_holder_gap",
+        ),
+        (
             "negative-force",
             example.replace("blank_holder_force = 200.0", "blank_holder_force = -5.0"),
             "blank_holder_force",

@@ -69,8 +69,13 @@ pub struct Process {
     /// Punch travel (mm) and physical punch speed (mm/s).
     pub stroke: f64,
     pub punch_speed: f64,
-    /// Blank-holder force (N); 0 leaves the holder out.
+    /// Blank-holder force (N): the holder pushes the flange against the die with it, free to
+    /// move along the stroke. 0 (the default) leaves the holder out, unless a gap is given.
+    #[serde(default)]
     pub blank_holder_force: f64,
+    /// Instead of a force, the holder fixed at this gap (mm) below the blank's lower face: the
+    /// die and the holder `thickness + gap` apart.
+    pub blank_holder_gap: Option<f64>,
     /// Coulomb friction between the blank and each tool.
     pub friction: Friction,
     /// Time scaling: the stroke runs this many times faster, eta1 divided by it.
@@ -232,6 +237,20 @@ impl Scenario {
                 p.blank_holder_force
             ));
         }
+        if let Some(gap) = p.blank_holder_gap {
+            if !(gap.is_finite() && gap >= 0.0) {
+                return Err(format!(
+                    "process.blank_holder_gap = {gap} must be >= 0 (mm)"
+                ));
+            }
+            if p.blank_holder_force > 0.0 {
+                return Err(
+                    "process.blank_holder_force and process.blank_holder_gap are two ways to \
+                     drive the holder: give one of them"
+                        .into(),
+                );
+            }
+        }
         for (key, mu) in [
             ("process.friction.punch", p.friction.punch),
             ("process.friction.die", p.friction.die),
@@ -272,7 +291,7 @@ impl Scenario {
             ));
         }
         let half_side = (0.5 * b.width - self.ridge_half_length()).min(0.5 * b.length);
-        if p.blank_holder_force > 0.0 && half_side <= holder {
+        if (p.blank_holder_force > 0.0 || p.blank_holder_gap.is_some()) && half_side <= holder {
             return Err(format!(
                 "the blank ({} x {} mm) does not reach the blank holder (inner radius {holder} \
                  mm): it cannot be held",

@@ -185,17 +185,21 @@ fn tool_set(
             thickness,
         )?,
     ];
-    if s.process.blank_holder_force == 0.0 {
-        return Ok((tools, None));
-    }
+    let (holder_motion, gap) = match (s.process.blank_holder_gap, s.process.blank_holder_force) {
+        (Some(gap), _) => (ToolMotion::Fixed, gap),
+        (None, force) if force > 0.0 => (
+            ToolMotion::Force {
+                force: Vector3::new(0.0, 0.0, force),
+                mass: HOLDER_MASS_RATIO * blank_mass,
+            },
+            0.0,
+        ),
+        (None, _) => return Ok((tools, None)),
+    };
     let holder_surface = shifted(
         double_dome_holder(ridge, s.holder_inner_radius(), outer, t.resolution)?,
-        -half,
+        -half - gap,
     );
-    let holder_motion = ToolMotion::Force {
-        force: Vector3::new(0.0, 0.0, s.process.blank_holder_force),
-        mass: HOLDER_MASS_RATIO * blank_mass,
-    };
     tools.push(RigidTool::new(
         "blank holder",
         holder_surface,
