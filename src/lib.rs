@@ -6,6 +6,7 @@
 //! - [`material`]: constitutive laws of the layers and the A:B:A laminate, material cards;
 //! - [`experiment`]: virtual material tests, starting with the material-point driver;
 //! - [`contact`]: rigid tools (triangulated surfaces) and their contact with the blank;
+//! - [`fit`]: identification of material parameters from test curves (`thermostamp fit`);
 //! - [`drape`]: kinematic (pin-jointed net) draping, a quick shear preview before forming;
 //! - [`forming`]: thermo-stamping runs from a scenario file (blank, tools, process);
 //! - [`io`]: readers and writers of the files users hand in and get back;
@@ -16,6 +17,7 @@ pub mod contact;
 pub mod drape;
 pub mod element;
 pub mod experiment;
+pub mod fit;
 pub mod forming;
 pub mod io;
 pub mod material;

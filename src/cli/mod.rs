@@ -5,6 +5,7 @@
 //! one line on standard error.
 
 mod drape;
+mod fit;
 mod forming_run;
 mod material_point;
 mod shared;
@@ -38,6 +39,9 @@ enum Command {
     Run(forming_run::Args),
     /// Kinematic draping preview of a scenario: the pin-jointed net on the formed punch.
     Drape(drape::Args),
+    /// Parameter identification from test curves (MODEL.md §5): `fit matrix`.
+    #[command(subcommand)]
+    Fit(fit::FitCommand),
 }
 
 /// Runs the command line and returns the process exit code.
@@ -54,6 +58,7 @@ pub fn main() -> i32 {
         Command::Test(command) => virtual_test::run(&command),
         Command::Run(args) => forming_run::run(&args),
         Command::Drape(args) => drape::run(&args),
+        Command::Fit(command) => fit::run(&command),
     };
     match result {
         Ok(()) => 0,

@@ -24,12 +24,16 @@ pub enum LineStyle {
     Markers,
 }
 
-/// One curve: `points` are `(x, y)` in the caller's units.
+/// One curve: `points` are `(x, y)` in the caller's units. An empty label leaves the series
+/// out of the legend.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Series {
     pub label: String,
     pub points: Vec<(f64, f64)>,
     pub style: LineStyle,
+    /// Index into the palette; by default the series' own index, so that a caller can give
+    /// data and model of the same case one colour.
+    pub colour: Option<usize>,
 }
 
 impl Series {
@@ -38,6 +42,15 @@ impl Series {
             label: label.into(),
             points,
             style,
+            colour: None,
+        }
+    }
+
+    /// The same series drawn in palette colour `index`.
+    pub fn with_colour(self, index: usize) -> Self {
+        Self {
+            colour: Some(index),
+            ..self
         }
     }
 }
@@ -244,7 +257,7 @@ fn draw(
     let line_width = px(2.5);
     let legend_size = px(24.0) as i32;
     for (index, (meta, points)) in plot.series.iter().zip(series).enumerate() {
-        let color = PALETTE[index % PALETTE.len()];
+        let color = PALETTE[meta.colour.unwrap_or(index) % PALETTE.len()];
         let style = color.stroke_width(line_width);
         // A line through a single point (or the same point repeated) would draw nothing:
         // show that point as a dot.
@@ -268,7 +281,9 @@ fn draw(
             ),
         }
         .map_err(|e| e.to_string())?;
-        set_legend(drawn, &meta.label, meta.style, legend_size, style);
+        if !meta.label.is_empty() {
+            set_legend(drawn, &meta.label, meta.style, legend_size, style);
+        }
     }
 
     // Close the frame on the top and right, where plotters draws no axis.

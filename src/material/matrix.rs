@@ -129,6 +129,16 @@ impl ViscoHyperelasticMatrix {
         }
     }
 
+    /// The `D1` table, as read from the card.
+    pub fn d1_table(&self) -> &TemperatureTable {
+        &self.d1
+    }
+
+    /// The `eta1` table, as read from the card.
+    pub fn eta1_table(&self) -> &TemperatureTable {
+        &self.eta1
+    }
+
     /// The temperatures over which all three tables are defined.
     pub fn parameters_range(&self) -> (f64, f64) {
         let ranges = [self.c10.range(), self.d1.range(), self.eta1.range()];

@@ -1,0 +1,80 @@
+//! Synthetic tension curves for round-trip checks and examples of the fits: the closed form of
+//! MODEL.md §5 with optional multiplicative Gaussian noise from a seeded generator, so that the
+//! same seed gives the same data on every machine (no RNG dependency).
+
+use super::matrix::uniaxial_stress;
+use super::tension_data::TensionCurve;
+
+/// Knuth's MMIX linear congruential generator: tiny, deterministic, good enough for test noise.
+#[derive(Clone, Debug)]
+pub struct Lcg {
+    state: u64,
+}
+
+impl Lcg {
+    pub fn new(seed: u64) -> Self {
+        Self { state: seed }
+    }
+
+    /// Uniform in the open interval (0, 1), from the top 53 bits.
+    pub fn uniform(&mut self) -> f64 {
+        self.state = self
+            .state
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        ((self.state >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+    }
+
+    /// Standard normal by the Box–Muller transform.
+    pub fn normal(&mut self) -> f64 {
+        let (u1, u2) = (self.uniform(), self.uniform());
+        (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+    }
+}
+
+/// A curve at `temperature` and `strain_rate` from `(C10, eta1)`: `points` stretches evenly
+/// from 1 to `1 + max_strain` (given as `(max_strain, points)`), each true stress multiplied by
+/// `1 + noise * N(0, 1)` (clamped at zero, as a load cell in tension reads).
+pub fn tension_curve(
+    origin: &str,
+    temperature: f64,
+    strain_rate: f64,
+    (c10, eta1): (f64, f64),
+    (max_strain, points): (f64, usize),
+    noise: f64,
+    rng: &mut Lcg,
+) -> TensionCurve {
+    let stretch: Vec<f64> = (0..points)
+        .map(|i| 1.0 + max_strain * i as f64 / (points - 1) as f64)
+        .collect();
+    let stress = stretch
+        .iter()
+        .map(|&l| {
+            let exact = uniaxial_stress(c10, eta1, l, strain_rate);
+            (exact * (1.0 + noise * rng.normal())).max(0.0)
+        })
+        .collect();
+    TensionCurve {
+        origin: origin.to_string(),
+        temperature,
+        strain_rate,
+        stretch,
+        stress,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn normal_deviates_have_unit_variance() {
+        let mut rng = Lcg::new(42);
+        let n = 20_000;
+        let samples: Vec<f64> = (0..n).map(|_| rng.normal()).collect();
+        let mean = samples.iter().sum::<f64>() / n as f64;
+        let variance = samples.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n as f64;
+        assert!(mean.abs() < 0.03, "{mean}");
+        assert!((variance - 1.0).abs() < 0.05, "{variance}");
+    }
+}

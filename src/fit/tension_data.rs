@@ -1,0 +1,265 @@
+//! Neat-resin uniaxial tension curves for `thermostamp fit matrix`: a TOML manifest lists one
+//! CSV file per (temperature, strain rate). Every error names the file, and the line where
+//! there is one.
+//!
+//! Manifest (paths relative to the manifest; unknown keys are errors):
+//! ```toml
+//! [[curve]]
+//! file = "pps-280C-slow.csv"
+//! temperature = 280.0        # °C
+//! strain_rate = 0.01         # 1/s, engineering: crosshead speed / gauge length
+//! [[curve]]
+//! file = "pps-280C-fast.csv"
+//! temperature = 280.0
+//! crosshead_speed = 2.0      # mm/s   (instead of strain_rate,
+//! gauge_length = 20.0        # mm      with the gauge length)
+//! ```
+//! CSV: a header naming one of `strain` (engineering, `d / L0`) or `stretch` (`1 + strain`),
+//! and one of `stress` (true, Cauchy stress, MPa, the sigma11 of MODEL.md §5) or
+//! `nominal_stress` (force over the initial section, MPa; converted with incompressibility,
+//! `sigma = lambda * P`).
+
+use crate::io::csv_table::parse_csv_table;
+use crate::io::{describe_toml_error, InputError};
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+
+/// One tension curve at constant crosshead speed, in the form the model uses.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TensionCurve {
+    /// The CSV file, as given in messages.
+    pub origin: String,
+    pub temperature: f64,
+    /// `lambdadot = v / L0`, constant at constant crosshead speed (1/s).
+    pub strain_rate: f64,
+    pub stretch: Vec<f64>,
+    /// True (Cauchy) stress, MPa.
+    pub stress: Vec<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Manifest {
+    curve: Vec<CurveEntry>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CurveEntry {
+    file: PathBuf,
+    temperature: f64,
+    strain_rate: Option<f64>,
+    crosshead_speed: Option<f64>,
+    gauge_length: Option<f64>,
+}
+
+/// Reads the manifest at `path` and every curve it lists.
+pub fn read_manifest(path: &Path) -> Result<Vec<TensionCurve>, InputError> {
+    let origin = path.display().to_string();
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| InputError::in_file(&origin, format!("cannot read the manifest: {e}")))?;
+    let manifest: Manifest = toml::from_str(&text)
+        .map_err(|e| InputError::in_file(&origin, describe_toml_error(&text, &e)))?;
+    if manifest.curve.is_empty() {
+        return Err(InputError::in_file(
+            &origin,
+            "the manifest lists no [[curve]]",
+        ));
+    }
+    let base = path.parent().unwrap_or_else(|| Path::new(""));
+    manifest
+        .curve
+        .iter()
+        .enumerate()
+        .map(|(i, entry)| {
+            let at = |message: String| {
+                InputError::in_file(
+                    &origin,
+                    format!("[[curve]] #{} ({}): {message}", i + 1, entry.file.display()),
+                )
+            };
+            let rate = strain_rate(entry).map_err(at)?;
+            if !entry.temperature.is_finite() {
+                return Err(at("temperature must be a finite number of °C".into()));
+            }
+            read_curve(&base.join(&entry.file), entry.temperature, rate)
+        })
+        .collect()
+}
+
+/// `strain_rate`, or `crosshead_speed / gauge_length`; exactly one of the two forms.
+fn strain_rate(entry: &CurveEntry) -> Result<f64, String> {
+    let rate = match (entry.strain_rate, entry.crosshead_speed, entry.gauge_length) {
+        (Some(rate), None, None) => rate,
+        (None, Some(speed), Some(length)) => {
+            if !(length.is_finite() && length > 0.0) {
+                return Err(format!(
+                    "gauge_length = {length}: must be a positive length (mm)"
+                ));
+            }
+            speed / length
+        }
+        (None, None, None) => {
+            return Err(
+                "give strain_rate (1/s) or crosshead_speed (mm/s) and gauge_length (mm)".into(),
+            )
+        }
+        (Some(_), _, _) => {
+            return Err("give strain_rate or crosshead_speed and gauge_length, not both".into())
+        }
+        _ => return Err("crosshead_speed and gauge_length go together".into()),
+    };
+    if rate.is_finite() && rate > 0.0 {
+        Ok(rate)
+    } else {
+        Err(format!(
+            "strain rate {rate} 1/s: must be positive (a tension test)"
+        ))
+    }
+}
+
+/// Reads one curve file and checks it point by point.
+pub fn read_curve(
+    path: &Path,
+    temperature: f64,
+    strain_rate: f64,
+) -> Result<TensionCurve, InputError> {
+    let origin = path.display().to_string();
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| InputError::in_file(&origin, format!("cannot read the curve: {e}")))?;
+    parse_curve(&text, &origin, temperature, strain_rate)
+}
+
+/// Parses and checks the CSV `text` of one curve; `origin` names it in messages.
+pub fn parse_curve(
+    text: &str,
+    origin: &str,
+    temperature: f64,
+    strain_rate: f64,
+) -> Result<TensionCurve, InputError> {
+    if text.trim().is_empty() {
+        return Err(InputError::in_file(origin, "the file is empty"));
+    }
+    let (x_name, y_name) = column_names(text, origin)?;
+    let table = parse_csv_table(text, origin, &[x_name, y_name])?;
+    let mut curve = TensionCurve {
+        origin: origin.to_string(),
+        temperature,
+        strain_rate,
+        stretch: Vec::with_capacity(table.rows.len()),
+        stress: Vec::with_capacity(table.rows.len()),
+    };
+    for (row, &line) in table.rows.iter().zip(&table.lines) {
+        let stretch = if x_name == "strain" {
+            1.0 + row[0]
+        } else {
+            row[0]
+        };
+        if stretch <= 0.0 {
+            return Err(InputError::at_line(
+                origin,
+                line,
+                format!("{x_name} = {}: the stretch must be positive", row[0]),
+            ));
+        }
+        if let Some(&previous) = curve.stretch.last() {
+            if stretch <= previous {
+                return Err(InputError::at_line(
+                    origin,
+                    line,
+                    format!(
+                        "{x_name} = {} does not increase: a curve at constant crosshead \
+                         speed must stretch monotonically",
+                        row[0]
+                    ),
+                ));
+            }
+        }
+        if row[1] < 0.0 {
+            return Err(InputError::at_line(
+                origin,
+                line,
+                format!(
+                    "{y_name} = {} is negative: tension curves have stresses >= 0",
+                    row[1]
+                ),
+            ));
+        }
+        // Incompressible: the section shrinks as 1/lambda, so sigma = lambda P.
+        let stress = if y_name == "nominal_stress" {
+            stretch * row[1]
+        } else {
+            row[1]
+        };
+        curve.stretch.push(stretch);
+        curve.stress.push(stress);
+    }
+    Ok(curve)
+}
+
+/// Which of the accepted column names the header uses.
+fn column_names(text: &str, origin: &str) -> Result<(&'static str, &'static str), InputError> {
+    let (line, header) = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| (i + 1, l.trim()))
+        .find(|(_, l)| !l.is_empty() && !l.starts_with('#'))
+        .ok_or_else(|| InputError::in_file(origin, "the file has no header line and no data"))?;
+    let names: Vec<&str> = header.split(',').map(str::trim).collect();
+    let pick = |choices: [&'static str; 2]| choices.into_iter().find(|c| names.contains(c));
+    match (pick(["strain", "stretch"]), pick(["stress", "nominal_stress"])) {
+        (Some(x), Some(y)) => Ok((x, y)),
+        _ => Err(InputError::at_line(
+            origin,
+            line,
+            format!(
+                "header '{header}': expected two columns, strain or stretch, and stress (true, MPa) \
+                 or nominal_stress (MPa)"
+            ),
+        )),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn error(text: &str) -> String {
+        parse_curve(text, "c.csv", 300.0, 0.01)
+            .unwrap_err()
+            .to_string()
+    }
+
+    #[test]
+    fn reads_strain_or_stretch_and_true_or_nominal_stress() {
+        let a = parse_curve("strain,stress\n0,0\n0.5,1.5\n", "c.csv", 300.0, 0.01).unwrap();
+        assert_eq!(a.stretch, vec![1.0, 1.5]);
+        assert_eq!(a.stress, vec![0.0, 1.5]);
+        let b = parse_curve("nominal_stress,stretch\n0,1\n1,1.5\n", "c.csv", 300.0, 0.01).unwrap();
+        assert_eq!(b.stretch, vec![1.0, 1.5]);
+        assert_eq!(b.stress, vec![0.0, 1.5]);
+    }
+
+    #[test]
+    fn bad_curves_name_file_and_line() {
+        assert_eq!(error(""), "c.csv: the file is empty");
+        assert_eq!(error("  \n\n"), "c.csv: the file is empty");
+        assert!(error("strain,stress\n").contains("no data rows"));
+        assert_eq!(
+            error("strain,stress\n0,0\n0.1,x\n"),
+            "c.csv: line 3: column 'stress': 'x' is not a finite number"
+        );
+        let e = error("strain,stress\n0,0\n0.2,1\n0.1,2\n");
+        assert!(
+            e.starts_with("c.csv: line 4: strain = 0.1 does not increase"),
+            "{e}"
+        );
+        let e = error("strain,stress\n0,0\n0.2,-1\n");
+        assert!(
+            e.starts_with("c.csv: line 3: stress = -1 is negative"),
+            "{e}"
+        );
+        let e = error("x,stress\n0,0\n");
+        assert!(e.starts_with("c.csv: line 1: header 'x,stress'"), "{e}");
+    }
+}
