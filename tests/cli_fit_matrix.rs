@@ -7,7 +7,7 @@
 
 mod common;
 
-use common::{repo_path, t300_card, thermostamp};
+use common::{assert_bad_input, repo_path, t300_card, thermostamp};
 use std::path::{Path, PathBuf};
 use thermostamp::fit::synthetic::{tension_curve, Lcg};
 use thermostamp::fit::tension_data::read_manifest;
@@ -254,24 +254,6 @@ fn updating_a_card_keeps_the_rest_and_loads() {
         (p.d1 - 2.0 / (4.0 * p.c10 * 1.45 / 0.3)).abs() < 1e-5 * p.d1,
         "{p:?}"
     );
-}
-
-/// Exit code 2 and a single line on stderr that contains every piece of `expected`.
-fn assert_bad_input(args: &[&str], expected: &[&str]) {
-    let out = thermostamp(args);
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
-    assert_eq!(
-        stderr.trim_end().lines().count(),
-        1,
-        "{args:?}: not one line: {stderr}"
-    );
-    for piece in expected {
-        assert!(
-            stderr.contains(piece),
-            "{args:?}: '{piece}' not in: {stderr}"
-        );
-    }
 }
 
 /// A manifest in a scratch folder with the test data's slow 280 °C curve replaced by `csv`.

@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{repo_path, thermostamp};
+use common::{assert_bad_input, repo_path, thermostamp};
 use std::path::PathBuf;
 
 const CARD: &str = "materials/t300-5hs-pps.toml";
@@ -44,24 +44,6 @@ fn scratch(name: &str, content: &str) -> PathBuf {
     let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
     std::fs::write(&path, content).unwrap();
     path
-}
-
-/// Exit code 2 and a single line on stderr that contains every piece of `expected`.
-fn assert_bad_input(args: &[&str], expected: &[&str]) {
-    let out = thermostamp(args);
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
-    assert_eq!(
-        stderr.trim_end().lines().count(),
-        1,
-        "{args:?}: not one line: {stderr}"
-    );
-    for piece in expected {
-        assert!(
-            stderr.contains(piece),
-            "{args:?}: '{piece}' not in: {stderr}"
-        );
-    }
 }
 
 #[test]

@@ -92,3 +92,21 @@ pub fn thermostamp(args: &[&str]) -> Output {
         .output()
         .expect("the binary runs")
 }
+
+/// Exit code 2 and a single line on stderr that contains every piece of `expected`.
+pub fn assert_bad_input(args: &[&str], expected: &[&str]) {
+    let out = thermostamp(args);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
+    assert_eq!(
+        stderr.trim_end().lines().count(),
+        1,
+        "{args:?}: not one line: {stderr}"
+    );
+    for piece in expected {
+        assert!(
+            stderr.contains(piece),
+            "{args:?}: '{piece}' not in: {stderr}"
+        );
+    }
+}
