@@ -203,6 +203,30 @@ fn embedded_font() -> Result<FontRef<'static>, PlotError> {
     .ok_or(PlotError::Font)
 }
 
+/// Sizes drawn as on a [`DESIGN_SIZE`] picture, scaled to the actual one.
+struct DesignScale {
+    scale: f64,
+}
+
+impl DesignScale {
+    fn of(root: &DrawingArea<PlotBackend, Shift>) -> Self {
+        let (width, height) = root.dim_in_pixel();
+        Self {
+            scale: (f64::from(width) / DESIGN_SIZE.0).min(f64::from(height) / DESIGN_SIZE.1),
+        }
+    }
+
+    /// A length of `design` pixels on the design picture, at least one pixel.
+    fn px(&self, design: f64) -> u32 {
+        (design * self.scale).round().max(1.0) as u32
+    }
+
+    /// The embedded font at `design` points on the design picture.
+    fn font(&self, design: f64) -> (&'static str, f64) {
+        (FONT_FAMILY, f64::from(self.px(design)))
+    }
+}
+
 /// Draws frame, grid, curves and legend; `series` holds the finite points of `plot.series`.
 fn draw(
     root: &DrawingArea<PlotBackend, Shift>,
@@ -210,14 +234,14 @@ fn draw(
     series: &[Vec<(f64, f64)>],
 ) -> Result<(), String> {
     let (width, height) = root.dim_in_pixel();
-    let scale = (f64::from(width) / DESIGN_SIZE.0).min(f64::from(height) / DESIGN_SIZE.1);
-    let px = |design: f64| (design * scale).round().max(1.0) as u32;
-    let font = |design: f64| (FONT_FAMILY, f64::from(px(design)));
+    let design = DesignScale::of(root);
+    let (px, font) = (|d: f64| design.px(d), |d: f64| design.font(d));
 
     root.fill(&WHITE).map_err(|e| e.to_string())?;
     let all = series.iter().flatten().copied();
     // About one tick every 110 design pixels across and 85 up, room for labels like "-1.5e-6".
-    let ticks = |pixels: u32, spacing: f64| (f64::from(pixels) / scale / spacing).clamp(3.0, 12.0);
+    let ticks =
+        |pixels: u32, spacing: f64| (f64::from(pixels) / design.scale / spacing).clamp(3.0, 12.0);
     let x_axis = Axis::new(
         padded_range(all.clone().map(|(x, _)| x)),
         ticks(width, 110.0),
@@ -603,10 +627,9 @@ fn draw_map(
     map: &MapPlot,
     finite: &[f64],
 ) -> Result<(), String> {
-    let (width, height) = root.dim_in_pixel();
-    let scale = (f64::from(width) / DESIGN_SIZE.0).min(f64::from(height) / DESIGN_SIZE.1);
-    let px = |design: f64| (design * scale).round().max(1.0) as u32;
-    let font = |design: f64| (FONT_FAMILY, f64::from(px(design)));
+    let width = root.dim_in_pixel().0;
+    let design = DesignScale::of(root);
+    let (px, font) = (|d: f64| design.px(d), |d: f64| design.font(d));
     root.fill(&WHITE).map_err(|e| e.to_string())?;
     let top = finite.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     let top = map.limit.map_or(top, |l| top.max(l)).max(1e-12);
