@@ -1,5 +1,5 @@
-//! `thermostamp fit ...`: parameter identification from test curves (MODEL.md §5). Only
-//! `fit matrix` exists so far; `fit fabric-tension` and `fit shear` will join it here.
+//! `thermostamp fit ...`: parameter identification from test curves (MODEL.md §5): `fit matrix`
+//! here, `fit fabric-tension` in `fit_fabric_tension.rs`; `fit shear` will join them.
 
 use crate::fit::card_section::{matrix_section, replace_matrix_section};
 use crate::fit::matrix::{fit_matrix, uniaxial_stress, BulkRule, Eta1, TemperatureFit};
@@ -14,6 +14,8 @@ use std::path::{Path, PathBuf};
 pub enum FitCommand {
     /// C10(T), eta1(T) (and D1) of the matrix law from neat-resin uniaxial tension curves.
     Matrix(MatrixArgs),
+    /// Yarn tension coefficients A_k of [fabric] from strip tension tests along warp / weft.
+    FabricTension(super::fit_fabric_tension::FabricTensionArgs),
 }
 
 #[derive(clap::Args, Debug)]
@@ -52,6 +54,7 @@ pub struct MatrixArgs {
 pub fn run(command: &FitCommand) -> anyhow::Result<()> {
     match command {
         FitCommand::Matrix(args) => run_matrix(args),
+        FitCommand::FabricTension(args) => super::fit_fabric_tension::run(args),
     }
 }
 

@@ -6,6 +6,7 @@
 
 mod drape;
 mod fit;
+mod fit_fabric_tension;
 mod forming_run;
 mod material_point;
 mod shared;

@@ -2,7 +2,9 @@
 //! MODEL.md §5 with optional multiplicative Gaussian noise from a seeded generator, so that the
 //! same seed gives the same data on every machine (no RNG dependency).
 
+use super::fabric_tension::strip_force_per_width;
 use super::matrix::uniaxial_stress;
+use super::strip_data::StripCurve;
 use super::tension_data::TensionCurve;
 
 /// Knuth's MMIX linear congruential generator: tiny, deterministic, good enough for test noise.
@@ -60,6 +62,35 @@ pub fn tension_curve(
         strain_rate,
         stretch,
         stress,
+    }
+}
+
+/// A strip tension curve along one yarn family from the law `A_2, A_3, ...` of a fabric layer
+/// of thickness `thickness` (MODEL.md §5, `N = t_B sum_k A_k (lambda - 1)^(k-1)`): `points`
+/// stretches evenly from 1 to `1 + max_strain`, each force per width multiplied by
+/// `1 + noise * N(0, 1)` (clamped at zero).
+pub fn strip_curve(
+    origin: &str,
+    thickness: f64,
+    coefficients: &[f64],
+    (max_strain, points): (f64, usize),
+    noise: f64,
+    rng: &mut Lcg,
+) -> StripCurve {
+    let stretch: Vec<f64> = (0..points)
+        .map(|i| 1.0 + max_strain * i as f64 / (points - 1) as f64)
+        .collect();
+    let force_per_width = stretch
+        .iter()
+        .map(|&l| {
+            let exact = strip_force_per_width(thickness, coefficients, l);
+            (exact * (1.0 + noise * rng.normal())).max(0.0)
+        })
+        .collect();
+    StripCurve {
+        origin: origin.to_string(),
+        stretch,
+        force_per_width,
     }
 }
 

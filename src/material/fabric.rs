@@ -34,6 +34,11 @@ impl YarnTension {
         }
     }
 
+    /// `A_2, A_3, ...` (MPa).
+    pub fn coefficients(&self) -> &[f64] {
+        &self.coefficients
+    }
+
     /// `W_t` as a function of the yarn stretch `lambda = sqrt(I)`.
     pub fn energy(&self, stretch: f64) -> f64 {
         let e = stretch - 1.0;

@@ -1,0 +1,192 @@
+//! `thermostamp fit fabric-tension`: the yarn tension coefficients `A_k` of a card's `[fabric]`
+//! from strip tension tests along warp and weft (MODEL.md §3, §5).
+
+use crate::fit::card_key::replace_key;
+use crate::fit::fabric_tension::{fit_yarn_tension, strip_force_per_width, TensionFit};
+use crate::fit::strip_data::{read_strip_curve, StripCurve};
+use crate::io::plot::{write_png, LinePlot, LineStyle, Series};
+use crate::material::MaterialCard;
+use anyhow::Context;
+use std::path::{Path, PathBuf};
+
+#[derive(clap::Args, Debug)]
+#[command(
+    group = clap::ArgGroup::new("direction").required(true).multiple(true).args(["warp", "weft"]),
+    after_help = "CSV columns: strain (engineering) or stretch, and force_per_width (N/mm) or\n\
+    force (N, divided by --width). Model (MODEL.md §5): force per width\n  \
+    N(lambda) = t_B sum_{k=2..n} A_k (lambda - 1)^(k-1),\n\
+    t_B the card's fabric_thickness; points with lambda <= 1 are not fitted."
+)]
+pub struct FabricTensionArgs {
+    /// Strip test pulled along the warp (CSV).
+    #[arg(long)]
+    warp: Option<PathBuf>,
+    /// Strip test pulled along the weft (CSV).
+    #[arg(long)]
+    weft: Option<PathBuf>,
+    /// Material card whose [fabric] warp_tension / weft_tension are replaced (the rest is kept
+    /// as it is); its fabric_thickness is t_B.
+    #[arg(long)]
+    card: PathBuf,
+    /// Where to write the card (may be the same file as --card).
+    #[arg(long)]
+    output: PathBuf,
+    /// Number of coefficients A_2.. to fit; default: as many as the card has.
+    #[arg(long)]
+    terms: Option<usize>,
+    /// Specimen width (mm), for CSV files with a force column (N).
+    #[arg(long)]
+    width: Option<f64>,
+    /// PNG comparing the data with the fitted model.
+    #[arg(long)]
+    plot: Option<PathBuf>,
+}
+
+/// One direction: its card key, curve and fit.
+struct DirectionFit {
+    key: &'static str,
+    curve: StripCurve,
+    fit: TensionFit,
+}
+
+pub fn run(args: &FabricTensionArgs) -> anyhow::Result<()> {
+    let text = std::fs::read_to_string(&args.card)
+        .with_context(|| format!("{}: cannot read the material card", args.card.display()))?;
+    let card = MaterialCard::from_toml(&text, &args.card.display().to_string())?;
+    let thickness = fabric_thickness(&card)?;
+    let mut fits = Vec::new();
+    for (key, path, law) in [
+        ("warp_tension", &args.warp, &card.fabric.warp),
+        ("weft_tension", &args.weft, &card.fabric.weft),
+    ] {
+        let Some(path) = path else { continue };
+        let curve = read_strip_curve(path, args.width)?;
+        let terms = args.terms.unwrap_or(law.coefficients().len());
+        let fit = fit_yarn_tension(&curve, thickness, terms)?;
+        fits.push(DirectionFit { key, curve, fit });
+    }
+
+    let mut written = text.clone();
+    for d in &fits {
+        let comment = provenance(d, thickness);
+        written = replace_key(
+            &written,
+            "fabric",
+            d.key,
+            &toml_array(&d.fit.coefficients),
+            &comment,
+        )
+        .map_err(|e| anyhow::anyhow!("{}: {e}", args.card.display()))?;
+    }
+    let origin = args.output.display().to_string();
+    // The card must still load (A2 > 0, tension >= 0 over the checked strains).
+    MaterialCard::from_toml(&written, &origin)?;
+    std::fs::write(&args.output, &written).with_context(|| format!("cannot write {origin}"))?;
+    print_table(&fits);
+    if let Some(png) = &args.plot {
+        write_png(png, &comparison_plot(&fits, thickness), 900, 600)?;
+    }
+    Ok(())
+}
+
+/// `t_B`: the thickness of the card's fabric layer (mm).
+fn fabric_thickness(card: &MaterialCard) -> anyhow::Result<f64> {
+    card.laminate
+        .layers()
+        .iter()
+        .find(|l| l.law.name() == "fabric")
+        .map(|l| l.thickness)
+        .context("the card's laminate has no fabric layer")
+}
+
+/// Comment lines above the written key.
+fn provenance(d: &DirectionFit, thickness: f64) -> Vec<String> {
+    vec![format!(
+        "{} fitted by `thermostamp fit fabric-tension` (MODEL.md §5, t_B = {thickness} mm) to \
+         {} points of {}: standard errors [{}] MPa, RMS residual {:.3e} N/mm.",
+        d.key,
+        d.fit.points,
+        Path::new(&d.curve.origin).display(),
+        d.fit
+            .standard_errors
+            .iter()
+            .map(|s| format!("{s:.2e}"))
+            .collect::<Vec<_>>()
+            .join(", "),
+        d.fit.rms_residual
+    )]
+}
+
+/// `[a, b, ...]` with each value to 6 significant digits, always a TOML float.
+fn toml_array(values: &[f64]) -> String {
+    let floats: Vec<String> = values
+        .iter()
+        .map(|v| {
+            let rounded: f64 = format!("{v:.5e}").parse().unwrap_or(*v);
+            format!("{rounded:?}")
+        })
+        .collect();
+    format!("[{}]", floats.join(", "))
+}
+
+fn print_table(fits: &[DirectionFit]) {
+    println!(
+        "{:>9}  {:>6}  {:>4}  {:>24}  {:>14}",
+        "direction", "points", "k", "A_k (MPa)", "RMS res (N/mm)"
+    );
+    for d in fits {
+        let direction = d.key.trim_end_matches("_tension");
+        for (i, (a, se)) in d
+            .fit
+            .coefficients
+            .iter()
+            .zip(&d.fit.standard_errors)
+            .enumerate()
+        {
+            let (name, points, rms) = if i == 0 {
+                (
+                    direction.to_string(),
+                    d.fit.points.to_string(),
+                    format!("{:.3e}", d.fit.rms_residual),
+                )
+            } else {
+                Default::default()
+            };
+            println!(
+                "{name:>9}  {points:>6}  {:>4}  {:>24}  {rms:>14}",
+                i + 2,
+                format!("{a:.4e} ± {se:.2e}")
+            );
+        }
+    }
+}
+
+/// Data as dots and the fitted model as a line, one colour per direction.
+fn comparison_plot(fits: &[DirectionFit], thickness: f64) -> LinePlot {
+    let mut series = Vec::new();
+    for (colour, d) in fits.iter().enumerate() {
+        let data = d
+            .curve
+            .stretch
+            .iter()
+            .zip(&d.curve.force_per_width)
+            .map(|(l, n)| (100.0 * (l - 1.0), *n));
+        series.push(Series::new("", data.collect(), LineStyle::Markers).with_colour(colour));
+        let last = d.curve.stretch[d.curve.stretch.len() - 1];
+        let model = (0..=100)
+            .map(|k| {
+                let l = 1.0 + (last - 1.0) * f64::from(k) / 100.0;
+                let n = strip_force_per_width(thickness, &d.fit.coefficients, l);
+                (100.0 * (l - 1.0), n)
+            })
+            .collect();
+        let label = d.key.trim_end_matches("_tension").to_string();
+        series.push(Series::new(label, model, LineStyle::Solid).with_colour(colour));
+    }
+    LinePlot {
+        title: "fit fabric-tension: data (dots), model of MODEL.md §5 (lines)".into(),
+        x_label: "strain (%)".into(),
+        y_label: "force per width (N/mm)".into(),
+        series,
+    }
+}

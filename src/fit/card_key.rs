@@ -1,0 +1,188 @@
+//! One key of one section of a material card replaced in the card's text, for fits that set a
+//! few keys of a section (`warp_tension`, `weft_tension`, later `shear` of `[fabric]`) rather
+//! than a whole section (see [`super::card_section`]). Only the value changes (it may span
+//! several lines, as an array can); everything else, comments included, stays byte for byte.
+
+/// `card` with the value of `key` in the table `[section]` replaced by `value` (TOML text,
+/// e.g. `[4.0e4, 2.0e6]`), and `comment` lines (without `#`) put just above the key. A key the
+/// section lacks is added at the end of the section. Errors: no such section, or a value that
+/// does not end (an unclosed array).
+pub fn replace_key(
+    card: &str,
+    section: &str,
+    key: &str,
+    value: &str,
+    comment: &[String],
+) -> Result<String, String> {
+    let (start, end) = section_span(card, section)
+        .ok_or_else(|| format!("the card has no [{section}] section"))?;
+    let comment: String = comment.iter().map(|l| format!("# {l}\n")).collect();
+    let Some((line_start, value_start)) = key_position(card, start, end, key) else {
+        let insert_at = end_of_content(card, start, end);
+        let separator = if card[..insert_at].ends_with('\n') {
+            ""
+        } else {
+            "\n"
+        };
+        return Ok(format!(
+            "{}{separator}{comment}{key} = {value}\n{}",
+            &card[..insert_at],
+            &card[insert_at..]
+        ));
+    };
+    let value_end = value_end(card, value_start)
+        .ok_or_else(|| format!("[{section}] {key}: the value does not end"))?;
+    Ok(format!(
+        "{}{comment}{}{value}{}",
+        &card[..line_start],
+        &card[line_start..value_start],
+        &card[value_end..]
+    ))
+}
+
+/// Byte range of the body of `[section]`: from after its header line to the start of the next
+/// table header (or the end).
+fn section_span(card: &str, section: &str) -> Option<(usize, usize)> {
+    let lines = line_offsets(card);
+    let header = lines
+        .iter()
+        .position(|&(s, e)| header_name(&card[s..e]) == Some(section))?;
+    let start = lines[header].1;
+    let end = lines[header + 1..]
+        .iter()
+        .find(|&&(s, e)| header_name(&card[s..e]).is_some())
+        .map_or(card.len(), |&(s, _)| s);
+    Some((start, end))
+}
+
+/// `(start, end)` of each line, the end including its newline.
+fn line_offsets(text: &str) -> Vec<(usize, usize)> {
+    let mut offsets = Vec::new();
+    let mut start = 0;
+    for line in text.split_inclusive('\n') {
+        offsets.push((start, start + line.len()));
+        start += line.len();
+    }
+    offsets
+}
+
+/// Start of the line of `key = ...` in `card[start..end]` and the start of its value.
+fn key_position(card: &str, start: usize, end: usize, key: &str) -> Option<(usize, usize)> {
+    let mut offset = start;
+    for line in card[start..end].split_inclusive('\n') {
+        let indent = line.len() - line.trim_start().len();
+        let rest = &line[indent..];
+        if let Some(after) = rest.strip_prefix(key) {
+            let spaces = after.len() - after.trim_start().len();
+            if let Some(value) = after[spaces..].strip_prefix('=') {
+                let blank = value.len() - value.trim_start().len();
+                let value_at = offset + indent + key.len() + spaces + 1 + blank;
+                return Some((offset, value_at));
+            }
+        }
+        offset += line.len();
+    }
+    None
+}
+
+/// End of the TOML value starting at `start`: past the matching `]` (or `}`) of an array or
+/// inline table, skipping strings and comments; a plain value ends before a comment or the end
+/// of its line, trailing spaces excluded.
+fn value_end(card: &str, start: usize) -> Option<usize> {
+    let bytes = card.as_bytes();
+    if !matches!(bytes.get(start), Some(b'[') | Some(b'{')) {
+        let line_end = card[start..].find('\n').map_or(card.len(), |i| start + i);
+        let plain = &card[start..line_end];
+        let plain = plain.split('#').next().unwrap_or("").trim_end();
+        return Some(start + plain.len());
+    }
+    let mut depth = 0usize;
+    let mut i = start;
+    while i < bytes.len() {
+        match bytes[i] {
+            b'[' | b'{' => depth += 1,
+            b']' | b'}' => {
+                depth -= 1;
+                if depth == 0 {
+                    return Some(i + 1);
+                }
+            }
+            b'#' => i += card[i..].find('\n').unwrap_or(card.len() - i),
+            quote @ (b'"' | b'\'') => {
+                i += 1 + card[i + 1..].find(quote as char)?;
+            }
+            _ => {}
+        }
+        i += 1;
+    }
+    None
+}
+
+/// Where a new key goes: after the last non-blank line of the section body.
+fn end_of_content(card: &str, start: usize, end: usize) -> usize {
+    let body = &card[start..end];
+    let trimmed = body.trim_end();
+    if trimmed.is_empty() {
+        return start;
+    }
+    let content_end = start + trimmed.len();
+    card[content_end..end]
+        .find('\n')
+        .map_or(end, |i| content_end + i + 1)
+}
+
+/// The name of a TOML table header line (`[name]` or `[[name]]`, a comment may follow).
+fn header_name(line: &str) -> Option<&str> {
+    let line = line.split('#').next()?.trim();
+    let inner = line.strip_prefix('[')?.strip_suffix(']')?;
+    let inner = inner
+        .strip_prefix('[')
+        .and_then(|s| s.strip_suffix(']'))
+        .unwrap_or(inner)
+        .trim();
+    let is_key = |c: char| c.is_ascii_alphanumeric() || "_-.\" ".contains(c);
+    (!inner.is_empty() && inner.chars().all(is_key)).then_some(inner)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const CARD: &str = "[layers]\nwarp_tension = 1\n\n[fabric]\n# A_k\nwarp_tension = [4.0e4,\n  2.0e6] # MPa\nweft_tension = [1.0]\nshear = [0.25] # c_k\n\n[bending]\nwarp = 1.0\n";
+
+    #[test]
+    fn replaces_only_the_value_of_the_key_in_its_section() {
+        let out = replace_key(CARD, "fabric", "warp_tension", "[5.0, 6.0]", &[]).unwrap();
+        assert_eq!(
+            out,
+            CARD.replace("[4.0e4,\n  2.0e6]", "[5.0, 6.0]"),
+            "{out}"
+        );
+        let out = replace_key(CARD, "fabric", "shear", "[1.0, 2.0]", &["fitted".into()]).unwrap();
+        assert_eq!(
+            out,
+            CARD.replace("shear = [0.25]", "# fitted\nshear = [1.0, 2.0]")
+        );
+        let out = replace_key(CARD, "bending", "warp", "2.0", &[]).unwrap();
+        assert_eq!(out, CARD.replace("warp = 1.0", "warp = 2.0"));
+    }
+
+    #[test]
+    fn a_missing_key_is_added_and_a_missing_section_is_an_error() {
+        let out = replace_key(CARD, "fabric", "compression_fraction", "0.01", &[]).unwrap();
+        assert_eq!(
+            out,
+            CARD.replace("# c_k\n", "# c_k\ncompression_fraction = 0.01\n")
+        );
+        let out = replace_key("[fabric]\na = 1", "fabric", "b", "2", &[]).unwrap();
+        assert_eq!(out, "[fabric]\na = 1\nb = 2\n");
+        assert!(replace_key(CARD, "matrix", "c10", "[1.0]", &[])
+            .unwrap_err()
+            .contains("no [matrix] section"));
+        assert!(
+            replace_key("[fabric]\nshear = [1.0,\n", "fabric", "shear", "[2.0]", &[])
+                .unwrap_err()
+                .contains("does not end")
+        );
+    }
+}
