@@ -1,8 +1,9 @@
-//! `thermostamp fit ...`: parameter identification from test curves (MODEL.md §5): `fit matrix`
-//! here, `fit fabric-tension` in `fit_fabric_tension.rs`; `fit shear` will join them.
+//! `thermostamp fit ...`: parameter identification from test curves (MODEL.md §5):
+//! `fit matrix` and `fit shear` here, `fit fabric-tension` in `fit_fabric_tension.rs`.
 
-use crate::fit::card_section::{matrix_section, replace_matrix_section};
+use crate::fit::card_section::{matrix_section, replace_fabric_shear, replace_matrix_section};
 use crate::fit::matrix::{fit_matrix, uniaxial_stress, BulkRule, Eta1, TemperatureFit};
+use crate::fit::shear::{fit_shear, read_force_curve, ShearFit, ShearTest};
 use crate::fit::tension_data::{read_manifest, TensionCurve};
 use crate::io::plot::{write_png, LinePlot, LineStyle, Series};
 use crate::material::{MaterialCard, TemperatureTable};
@@ -16,6 +17,59 @@ pub enum FitCommand {
     Matrix(MatrixArgs),
     /// Yarn tension coefficients A_k of [fabric] from strip tension tests along warp / weft.
     FabricTension(super::fit_fabric_tension::FabricTensionArgs),
+    /// Shear coefficients c_k of [fabric] shear from a bias-extension or picture-frame curve.
+    Shear(ShearArgs),
+}
+
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ShearTestKind {
+    BiasExtension,
+    PictureFrame,
+}
+
+#[derive(clap::Args, Debug)]
+#[command(
+    after_help = "CSV columns: displacement_mm (crosshead, increasing), force_N (>= 0).\n\
+    Bias extension (default): --width W --length H (free length, H/W >= 2); the normalised\n\
+    shear force of Cao et al. 2008 is solved recursively from small angles (MODEL.md §5).\n\
+    Picture frame: --frame-side L (pin to pin) [--fabric-side, default L].\n\
+    Model: F_sh(gamma) = 2 t_B sin(gamma) W_s'(sin^2 gamma), W_s = sum_k c_k I10^k.\n\
+    The card must be a dry fabric (stack = [\"fabric\"]): subtracting matrix layers is not\n\
+    implemented."
+)]
+pub struct ShearArgs {
+    /// Force–displacement curve (CSV).
+    #[arg(long)]
+    data: PathBuf,
+    #[arg(long, value_enum, default_value = "bias-extension")]
+    test: ShearTestKind,
+    /// Bias extension: specimen width W (mm).
+    #[arg(long)]
+    width: Option<f64>,
+    /// Bias extension: free length H between the clamps (mm).
+    #[arg(long)]
+    length: Option<f64>,
+    /// Picture frame: frame side, pin to pin (mm).
+    #[arg(long)]
+    frame_side: Option<f64>,
+    /// Picture frame: side of the sheared fabric square (mm); default the frame side.
+    #[arg(long)]
+    fabric_side: Option<f64>,
+    /// Material card whose [fabric] shear is replaced (everything else is kept as it is).
+    #[arg(long)]
+    card: PathBuf,
+    /// Where to write the card (may be the same file as --card).
+    #[arg(long)]
+    output: PathBuf,
+    /// Number of coefficients c_1..c_m.
+    #[arg(long, default_value_t = 3)]
+    terms: usize,
+    /// Largest shear angle fitted (degrees).
+    #[arg(long, default_value_t = 50.0)]
+    max_shear: f64,
+    /// PNG of the normalised shear force vs shear angle: data (dots) and model (line).
+    #[arg(long)]
+    plot: Option<PathBuf>,
 }
 
 #[derive(clap::Args, Debug)]
@@ -55,6 +109,158 @@ pub fn run(command: &FitCommand) -> anyhow::Result<()> {
     match command {
         FitCommand::Matrix(args) => run_matrix(args),
         FitCommand::FabricTension(args) => super::fit_fabric_tension::run(args),
+        FitCommand::Shear(args) => run_shear(args),
+    }
+}
+
+fn run_shear(args: &ShearArgs) -> anyhow::Result<()> {
+    let test = shear_test(args)?;
+    if !(args.max_shear.is_finite() && args.max_shear > 0.0 && args.max_shear < 90.0) {
+        anyhow::bail!(
+            "--max-shear {}: must lie between 0 and 90 degrees",
+            args.max_shear
+        );
+    }
+    let (text, card) = read_card(&args.card)?;
+    let thickness = dry_fabric_thickness(&card, &args.card)?;
+    let curve = read_force_curve(&args.data)?;
+    let fit = fit_shear(
+        &curve,
+        &test,
+        thickness,
+        args.terms,
+        args.max_shear.to_radians(),
+    )?;
+    let origin = args.output.display().to_string();
+    let written =
+        replace_fabric_shear(&text, &fit.result.parameters, &shear_provenance(args, &fit))
+            .ok_or_else(|| {
+                anyhow::anyhow!("{}: no [fabric] shear key to replace", args.card.display())
+            })?;
+    // The card must still load; anything else is a bug here, caught before writing.
+    MaterialCard::from_toml(&written, &origin)?;
+    std::fs::write(&args.output, &written).with_context(|| format!("cannot write {origin}"))?;
+    print_shear_table(&fit);
+    if let Some(png) = &args.plot {
+        write_png(png, &shear_plot(&fit, thickness, args.max_shear), 900, 600)?;
+    }
+    Ok(())
+}
+
+fn shear_test(args: &ShearArgs) -> anyhow::Result<ShearTest> {
+    let test = match args.test {
+        ShearTestKind::BiasExtension => match (args.width, args.length) {
+            (Some(width), Some(length)) => ShearTest::BiasExtension { width, length },
+            _ => anyhow::bail!("a bias-extension curve needs --width and --length (mm)"),
+        },
+        ShearTestKind::PictureFrame => match args.frame_side {
+            Some(frame_side) => ShearTest::PictureFrame {
+                frame_side,
+                fabric_side: args.fabric_side.unwrap_or(frame_side),
+            },
+            None => anyhow::bail!("a picture-frame curve needs --frame-side (mm)"),
+        },
+    };
+    test.validate().map_err(anyhow::Error::msg)?;
+    Ok(test)
+}
+
+/// The fabric layer's thickness t_B of a dry-fabric card; cards with matrix layers are refused
+/// (their share of the measured force would have to be subtracted first, MODEL.md §5).
+fn dry_fabric_thickness(card: &MaterialCard, path: &Path) -> anyhow::Result<f64> {
+    match card.laminate.layers() {
+        [layer] if layer.law.name() == "fabric" => Ok(layer.thickness),
+        layers => anyhow::bail!(
+            "{}: the stack has {} layers ({}): fitting the shear of a card with matrix layers \
+             needs their contribution subtracted (MODEL.md §5), which is not implemented; \
+             fit a dry-fabric card (stack = [\"fabric\"])",
+            path.display(),
+            layers.len(),
+            layers
+                .iter()
+                .map(|l| l.law.name())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    }
+}
+
+/// Comment lines above the written `shear` key: what it was fitted from and how.
+fn shear_provenance(args: &ShearArgs, fit: &ShearFit) -> Vec<String> {
+    let test = match args.test {
+        ShearTestKind::BiasExtension => format!(
+            "bias extension {} x {} mm",
+            args.width.unwrap_or(f64::NAN),
+            args.length.unwrap_or(f64::NAN)
+        ),
+        ShearTestKind::PictureFrame => format!(
+            "picture frame, frame side {} mm",
+            args.frame_side.unwrap_or(f64::NAN)
+        ),
+    };
+    let errors: Vec<String> = fit
+        .result
+        .standard_errors
+        .iter()
+        .map(|e| format!("{e:.2e}"))
+        .collect();
+    vec![
+        format!(
+            "Fitted by `thermostamp fit shear` (MODEL.md §5) to {} ({test}), {} points up to \
+             {}° of shear.",
+            args.data.display(),
+            fit.points.len(),
+            args.max_shear
+        ),
+        format!(
+            "Standard errors [{}] MPa; RMS misfit of F_sh {:.3e} N/mm.",
+            errors.join(", "),
+            fit.rms_force
+        ),
+    ]
+}
+
+fn print_shear_table(fit: &ShearFit) {
+    println!("{:>4}  {:>24}", "k", "c_k (MPa)");
+    for (k, (c, e)) in fit
+        .result
+        .parameters
+        .iter()
+        .zip(&fit.result.standard_errors)
+        .enumerate()
+    {
+        println!("{:>4}  {:>24}", k + 1, format!("{c:.4e} ± {e:.2e}"));
+    }
+    println!(
+        "points: {}; RMS residual: {:.3e} N/mm ({:.3} relative)",
+        fit.points.len(),
+        fit.rms_force,
+        fit.result.rms_residual
+    );
+}
+
+/// Normalised shear force vs shear angle: data as dots, the fitted law as a line.
+fn shear_plot(fit: &ShearFit, thickness: f64, max_shear_deg: f64) -> LinePlot {
+    let data = fit
+        .points
+        .iter()
+        .map(|p| (p.gamma.to_degrees(), p.force))
+        .collect();
+    let law = fit.law();
+    let model = (0..=100)
+        .map(|k| {
+            let g = max_shear_deg * f64::from(k) / 100.0;
+            (g, law.normalised_shear_force(thickness, g.to_radians()))
+        })
+        .collect();
+    LinePlot {
+        title: "fit shear: data (dots), F_sh = 2 t sin(g) W_s'(sin^2 g) (line)".into(),
+        x_label: "shear angle (°)".into(),
+        y_label: "normalised shear force (N/mm)".into(),
+        series: vec![
+            Series::new("data", data, LineStyle::Markers).with_colour(0),
+            Series::new("model", model, LineStyle::Solid).with_colour(1),
+        ],
     }
 }
 

@@ -1,4 +1,4 @@
-//! Synthetic tension curves for round-trip checks and examples of the fits: the closed form of
+//! Synthetic tension and bias-extension curves for round-trip checks and examples of the fits: the closed form of
 //! MODEL.md §5 with optional multiplicative Gaussian noise from a seeded generator, so that the
 //! same seed gives the same data on every machine (no RNG dependency).
 
@@ -6,6 +6,10 @@ use super::fabric_tension::strip_force_per_width;
 use super::matrix::uniaxial_stress;
 use super::strip_data::StripCurve;
 use super::tension_data::TensionCurve;
+use crate::experiment::kinematics::{
+    bias_extension_displacement, bias_extension_force, bias_extension_shear_angle,
+};
+use crate::material::fabric::ShearInteraction;
 
 /// Knuth's MMIX linear congruential generator: tiny, deterministic, good enough for test noise.
 #[derive(Clone, Debug)]
@@ -92,6 +96,33 @@ pub fn strip_curve(
         stretch,
         force_per_width,
     }
+}
+
+/// A bias-extension curve (CSV text, `displacement_mm,force_N`) of a `width` x `length`
+/// specimen of a fabric layer `thickness` thick with shear law `law`: `points` displacements
+/// evenly up to the pin-jointed angle `max_gamma` (radians), forces from the forward form of
+/// Cao's normalisation (MODEL.md §5, `bias_extension_force`), each multiplied by
+/// `1 + noise * N(0, 1)` and clamped at zero. The first row is `0,0`.
+pub fn bias_extension_curve(
+    law: &ShearInteraction,
+    thickness: f64,
+    (width, length): (f64, f64),
+    (max_gamma, points): (f64, usize),
+    noise: f64,
+    rng: &mut Lcg,
+) -> String {
+    let d_max = bias_extension_displacement(width, length, max_gamma);
+    let mut text = String::from("displacement_mm,force_N\n0,0\n");
+    for i in 1..=points {
+        let d = d_max * i as f64 / points as f64;
+        let gamma = bias_extension_shear_angle(width, length, d);
+        let exact = bias_extension_force(width, length, gamma, |g| {
+            law.normalised_shear_force(thickness, g)
+        });
+        let f = (exact * (1.0 + noise * rng.normal())).max(0.0);
+        text.push_str(&format!("{d},{f}\n"));
+    }
+    text
 }
 
 #[cfg(test)]

@@ -1,0 +1,153 @@
+//! `thermostamp fit shear` run as a user runs it: a synthetic bias-extension curve gives back
+//! its coefficients in a card that loads and keeps every other line, a PNG is written, and bad
+//! input gives a one-line error with exit code 2 naming the file (and line).
+
+mod common;
+
+use common::{repo_path, thermostamp};
+use std::path::{Path, PathBuf};
+use thermostamp::fit::synthetic::{bias_extension_curve, Lcg};
+use thermostamp::material::fabric::ShearInteraction;
+use thermostamp::material::MaterialCard;
+
+const TRUTH: [f64; 3] = [0.02, 0.01, 0.2];
+
+fn scratch_dir(name: &str) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+        .join("fit-shear")
+        .join(name);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// A noiseless 150 x 450 mm curve of the stiff-yarn test fabric's 0.3 mm layer.
+fn synthetic_curve(dir: &Path) -> PathBuf {
+    let law = ShearInteraction::new(TRUTH.to_vec());
+    let text = bias_extension_curve(
+        &law,
+        0.3,
+        (150.0, 450.0),
+        (52f64.to_radians(), 60),
+        0.0,
+        &mut Lcg::new(1),
+    );
+    let path = dir.join("bias.csv");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+fn args<'a>(data: &'a str, card: &'a str, output: &'a str) -> Vec<&'a str> {
+    vec![
+        "fit", "shear", "--data", data, "--width", "150", "--length", "450", "--card", card,
+        "--output", output,
+    ]
+}
+
+#[test]
+fn fits_the_shear_key_and_keeps_the_rest_of_the_card() {
+    let dir = scratch_dir("round-trip");
+    let data = synthetic_curve(&dir);
+    let card = repo_path("tests/data/stiff-yarn-fabric.toml");
+    let output = dir.join("fitted.toml");
+    let png = dir.join("fit.png");
+    let _ = std::fs::remove_file(&png);
+    let mut a = args(
+        data.to_str().unwrap(),
+        card.to_str().unwrap(),
+        output.to_str().unwrap(),
+    );
+    a.extend(["--plot", png.to_str().unwrap(), "--terms", "3"]);
+    let out = thermostamp(&a);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        stdout.contains("c_k (MPa)") && stdout.contains("RMS residual"),
+        "{stdout}"
+    );
+    assert!(std::fs::metadata(&png).unwrap().len() > 1000);
+
+    let fitted = MaterialCard::load(&output).unwrap();
+    let t = 0.3;
+    let truth = ShearInteraction::new(TRUTH.to_vec());
+    for g in [10.0, 30.0, 50.0] {
+        let g = f64::to_radians(g);
+        let (a, b) = (
+            fitted.fabric.shear.normalised_shear_force(t, g),
+            truth.normalised_shear_force(t, g),
+        );
+        assert!((a - b).abs() < 0.01 * b, "{a} vs {b}");
+    }
+    // every line but the shear key (and its new comments) is kept
+    let before = std::fs::read_to_string(&card).unwrap();
+    let after = std::fs::read_to_string(&output).unwrap();
+    let kept = |text: &str| -> Vec<String> {
+        text.lines()
+            .filter(|l| {
+                !l.starts_with("shear")
+                    && !l.starts_with("# Fitted")
+                    && !l.starts_with("# Standard")
+            })
+            .map(String::from)
+            .collect()
+    };
+    assert_eq!(kept(&before), kept(&after));
+}
+
+#[test]
+fn bad_input_gives_one_line_naming_the_file() {
+    let dir = scratch_dir("bad");
+    let card = repo_path("tests/data/stiff-yarn-fabric.toml");
+    let card = card.to_str().unwrap();
+    let output = dir.join("out.toml");
+    let output = output.to_str().unwrap();
+    let cases: [(&str, &str, &[&str]); 4] = [
+        ("empty", "", &["empty.csv", "the file is empty"]),
+        (
+            "backwards",
+            "displacement_mm,force_N\n0,0\n2,1\n1,2\n3,3\n",
+            &["backwards.csv", "line 4", "does not increase"],
+        ),
+        (
+            "negative",
+            "displacement_mm,force_N\n0,0\n1,-1\n2,2\n3,3\n",
+            &["negative.csv", "line 3", "negative"],
+        ),
+        (
+            "few",
+            "displacement_mm,force_N\n0,0\n1,1\n2,2\n",
+            &["few.csv", "2 data points for 3 parameters"],
+        ),
+    ];
+    for (name, text, expected) in cases {
+        let data = dir.join(format!("{name}.csv"));
+        std::fs::write(&data, text).unwrap();
+        let out = thermostamp(&args(data.to_str().unwrap(), card, output));
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{name}: {stderr}");
+        assert_eq!(stderr.trim().lines().count(), 1, "{name}: {stderr}");
+        for e in expected {
+            assert!(stderr.contains(e), "{name}: {stderr}");
+        }
+    }
+    // H/W < 2, and a card with matrix layers
+    let data = synthetic_curve(&dir);
+    let data = data.to_str().unwrap();
+    let mut short = args(data, card, output);
+    short[7] = "250";
+    let out = thermostamp(&short);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(stderr.contains("length/width = 1.667"), "{stderr}");
+    let t300 = repo_path("materials/t300-5hs-pps.toml");
+    let out = thermostamp(&args(data, t300.to_str().unwrap(), output));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        stderr.contains("t300-5hs-pps.toml") && stderr.contains("matrix layers"),
+        "{stderr}"
+    );
+}
