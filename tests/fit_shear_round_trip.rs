@@ -87,3 +87,34 @@ fn standard_errors_cover_the_truth_over_many_seeds() {
     );
     assert!(share > 0.8, "{inside} of {total}");
 }
+
+/// Picture frame (MODEL.md §5): a curve made from the law by the frame's kinematics,
+/// `theta = arccos((sqrt 2 L + d) / (2 L))`, `gamma = 90° - 2 theta`, and its force,
+/// `F = 2 cos(theta) F_sh(gamma) L_fabric^2 / L_frame`, gives the coefficients back within 1 %.
+#[test]
+fn picture_frame_curve_gives_the_coefficients_within_one_percent() {
+    let (frame_side, fabric_side) = (145.0, 120.0);
+    let law = ShearInteraction::new(TRUTH.to_vec());
+    let test = ShearTest::PictureFrame {
+        frame_side,
+        fabric_side,
+    };
+    let mut text = String::from("displacement_mm,force_N\n0,0\n");
+    for i in 1..=60 {
+        let d = 60.0 * i as f64 / 60.0;
+        let theta = ((2f64.sqrt() * frame_side + d) / (2.0 * frame_side)).acos();
+        let gamma = std::f64::consts::FRAC_PI_2 - 2.0 * theta;
+        let force = 2.0
+            * theta.cos()
+            * law.normalised_shear_force(THICKNESS, gamma)
+            * fabric_side
+            * fabric_side
+            / frame_side;
+        text.push_str(&format!("{d},{force}\n"));
+    }
+    let curve = parse_force_curve(&text, "frame.csv").unwrap();
+    let fit = fit_shear(&curve, &test, THICKNESS, 3, 50f64.to_radians()).unwrap();
+    for (c, truth) in fit.result.parameters.iter().zip(TRUTH) {
+        assert!((c - truth).abs() < 0.01 * truth, "{:?}", fit.result);
+    }
+}
