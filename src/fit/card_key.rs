@@ -132,7 +132,7 @@ fn end_of_content(card: &str, start: usize, end: usize) -> usize {
 }
 
 /// The name of a TOML table header line (`[name]` or `[[name]]`, a comment may follow).
-fn header_name(line: &str) -> Option<&str> {
+pub(super) fn header_name(line: &str) -> Option<&str> {
     let line = line.split('#').next()?.trim();
     let inner = line.strip_prefix('[')?.strip_suffix(']')?;
     let inner = inner

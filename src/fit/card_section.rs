@@ -2,6 +2,7 @@
 //! existing card's text; the `[fabric] shear` key likewise. The replacement is textual so that the rest of the card, comments
 //! included, stays exactly as it was.
 
+use super::card_key::header_name;
 use super::matrix::{Eta1, TemperatureFit};
 
 /// The `[matrix]` section (header, provenance comments, the four tables) for `fits`, which are
@@ -61,19 +62,6 @@ pub fn replace_matrix_section(card: &str, section: &str) -> String {
         out.extend(lines[end..].iter().map(|l| l.to_string()));
     }
     out.join("\n") + "\n"
-}
-
-/// The name of a TOML table header line (`[name]` or `[[name]]`, a comment may follow).
-fn header_name(line: &str) -> Option<&str> {
-    let line = line.split('#').next()?.trim();
-    let inner = line.strip_prefix('[')?.strip_suffix(']')?;
-    let inner = inner
-        .strip_prefix('[')
-        .and_then(|s| s.strip_suffix(']'))
-        .unwrap_or(inner)
-        .trim();
-    let is_key = |c: char| c.is_ascii_alphanumeric() || "_-.\" ".contains(c);
-    (!inner.is_empty() && inner.chars().all(is_key)).then_some(inner)
 }
 
 /// `card` with the `shear = [...]` key of its `[fabric]` section (one line or a bracketed
