@@ -8,7 +8,7 @@
 
 mod common;
 
-use common::{repo_path, t300_card, thermostamp};
+use common::{assert_bad_input, repo_path, run_ok, scratch_dir, t300_card, thermostamp};
 use std::path::{Path, PathBuf};
 use thermostamp::experiment::sheet_test::SheetTest;
 use thermostamp::experiment::uniaxial::UniaxialTension;
@@ -120,7 +120,8 @@ fn regenerate() {
 fn committed_data_are_what_the_generator_makes() {
     for set in [TEST_DATA, EXAMPLE] {
         for (name, content) in generate(&set) {
-            let scratch = scratch_dir(&format!("generated-{}", set.seed)).join(name);
+            let scratch =
+                scratch_dir("fit-fabric-tension", &format!("generated-{}", set.seed)).join(name);
             std::fs::write(&scratch, content).unwrap();
             let made = read_strip_curve(&scratch, Some(WIDTH)).unwrap();
             let committed = read_strip_curve(&repo_path(set.dir).join(name), Some(WIDTH)).unwrap();
@@ -138,24 +139,6 @@ fn committed_data_are_what_the_generator_makes() {
             }
         }
     }
-}
-
-fn scratch_dir(name: &str) -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
-        .join("fit-fabric-tension")
-        .join(name);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn run_ok(args: &[&str]) -> String {
-    let out = thermostamp(args);
-    assert!(
-        out.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).unwrap()
 }
 
 /// Fits the test data (or the example) with the CLI into `dir/card.toml`; returns its path and
@@ -186,7 +169,7 @@ fn fit_with_cli(set: &DataSet, dir: &Path, extra: &[&str]) -> (PathBuf, String) 
 
 #[test]
 fn noiseless_data_are_fitted_back_within_one_percent_and_the_card_keeps_the_rest() {
-    let dir = scratch_dir("round-trip");
+    let dir = scratch_dir("fit-fabric-tension", "round-trip");
     let png = dir.join("fit.png");
     let (output, stdout) = fit_with_cli(&TEST_DATA, &dir, &["--plot", png.to_str().unwrap()]);
     assert!(
@@ -243,7 +226,7 @@ fn example_with_two_percent_noise_is_within_two_standard_errors() {
 /// 1 % of the data's last point.
 #[test]
 fn fitted_card_reproduces_the_data_in_the_virtual_strip_test() {
-    let dir = scratch_dir("virtual");
+    let dir = scratch_dir("fit-fabric-tension", "virtual");
     let (output, _) = fit_with_cli(&TEST_DATA, &dir, &[]);
     let card = MaterialCard::load(&output).unwrap();
     for (ply_angle, file) in [(0.0, "warp.csv"), (90.0, "weft.csv")] {
@@ -273,27 +256,9 @@ fn fitted_card_reproduces_the_data_in_the_virtual_strip_test() {
     assert!(n > 0.0);
 }
 
-/// Exit code 2 and a single line on stderr that contains every piece of `expected`.
-fn assert_bad_input(args: &[&str], expected: &[&str]) {
-    let out = thermostamp(args);
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
-    assert_eq!(
-        stderr.trim_end().lines().count(),
-        1,
-        "{args:?}: not one line: {stderr}"
-    );
-    for piece in expected {
-        assert!(
-            stderr.contains(piece),
-            "{args:?}: '{piece}' not in: {stderr}"
-        );
-    }
-}
-
 #[test]
 fn bad_input_is_one_line_naming_the_file() {
-    let dir = scratch_dir("bad");
+    let dir = scratch_dir("fit-fabric-tension", "bad");
     let output = dir.join("out.toml");
     let out = output.to_str().unwrap();
     let case = |name: &str, csv: &str| {

@@ -7,7 +7,7 @@
 
 mod common;
 
-use common::{assert_bad_input, repo_path, t300_card, thermostamp};
+use common::{assert_bad_input, repo_path, run_ok, scratch_dir, t300_card, thermostamp};
 use std::path::{Path, PathBuf};
 use thermostamp::fit::synthetic::{tension_curve, Lcg};
 use thermostamp::fit::tension_data::read_manifest;
@@ -126,7 +126,7 @@ fn regenerate() {
 #[test]
 fn committed_data_are_what_the_generator_makes() {
     for set in [TEST_DATA, EXAMPLE] {
-        let scratch = scratch_dir(&format!("generated-{}", set.seed));
+        let scratch = scratch_dir("fit-matrix", &format!("generated-{}", set.seed));
         for (name, content) in generate(&set) {
             std::fs::write(scratch.join(name), content).unwrap();
         }
@@ -154,24 +154,6 @@ fn committed_data_are_what_the_generator_makes() {
     }
 }
 
-fn scratch_dir(name: &str) -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
-        .join("fit-matrix")
-        .join(name);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn run_ok(args: &[&str]) -> String {
-    let out = thermostamp(args);
-    assert!(
-        out.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).unwrap()
-}
-
 /// The `[matrix]` tables of a written card or section.
 fn matrix_tables(path: &Path) -> toml::Table {
     let text = std::fs::read_to_string(path).unwrap();
@@ -190,7 +172,7 @@ fn floats(table: &toml::Table, key: &str) -> Vec<f64> {
 
 #[test]
 fn noiseless_data_are_fitted_back_within_one_percent() {
-    let dir = scratch_dir("round-trip");
+    let dir = scratch_dir("fit-matrix", "round-trip");
     let (card, png) = (dir.join("matrix.toml"), dir.join("fit.png"));
     let stdout = run_ok(&[
         "fit",
@@ -223,7 +205,7 @@ fn noiseless_data_are_fitted_back_within_one_percent() {
 
 #[test]
 fn updating_a_card_keeps_the_rest_and_loads() {
-    let dir = scratch_dir("update");
+    let dir = scratch_dir("fit-matrix", "update");
     let output = dir.join("card.toml");
     run_ok(&[
         "fit",
@@ -258,7 +240,7 @@ fn updating_a_card_keeps_the_rest_and_loads() {
 
 /// A manifest in a scratch folder with the test data's slow 280 °C curve replaced by `csv`.
 fn manifest_with(case: &str, csv: &str, extra_key: &str) -> PathBuf {
-    let dir = scratch_dir(case);
+    let dir = scratch_dir("fit-matrix", case);
     let source = repo_path(TEST_DATA.dir);
     for entry in std::fs::read_dir(&source).unwrap() {
         let path = entry.unwrap().path();
@@ -387,7 +369,7 @@ fn too_few_points_and_missing_options_are_bad_input() {
         "tests/data/fit-matrix/manifest.toml",
         "--output",
     ];
-    let out = scratch_dir("options").join("out.toml");
+    let out = scratch_dir("fit-matrix", "options").join("out.toml");
     let out = out.to_str().unwrap();
     assert_bad_input(
         &[&base[..], &[out]].concat(),

@@ -4,21 +4,13 @@
 
 mod common;
 
-use common::{repo_path, thermostamp};
+use common::{repo_path, scratch_dir, thermostamp};
 use std::path::{Path, PathBuf};
 use thermostamp::fit::synthetic::{bias_extension_curve, Lcg};
 use thermostamp::material::fabric::ShearInteraction;
 use thermostamp::material::MaterialCard;
 
 const TRUTH: [f64; 3] = [0.02, 0.01, 0.2];
-
-fn scratch_dir(name: &str) -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
-        .join("fit-shear")
-        .join(name);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
 
 /// A noiseless 150 x 450 mm curve of the stiff-yarn test fabric's 0.3 mm layer.
 fn synthetic_curve(dir: &Path) -> PathBuf {
@@ -45,7 +37,7 @@ fn args<'a>(data: &'a str, card: &'a str, output: &'a str) -> Vec<&'a str> {
 
 #[test]
 fn fits_the_shear_key_and_keeps_the_rest_of_the_card() {
-    let dir = scratch_dir("round-trip");
+    let dir = scratch_dir("fit-shear", "round-trip");
     let data = synthetic_curve(&dir);
     let card = repo_path("tests/data/stiff-yarn-fabric.toml");
     let output = dir.join("fitted.toml");
@@ -99,7 +91,7 @@ fn fits_the_shear_key_and_keeps_the_rest_of_the_card() {
 
 #[test]
 fn bad_input_gives_one_line_naming_the_file() {
-    let dir = scratch_dir("bad");
+    let dir = scratch_dir("fit-shear", "bad");
     let card = repo_path("tests/data/stiff-yarn-fabric.toml");
     let card = card.to_str().unwrap();
     let output = dir.join("out.toml");

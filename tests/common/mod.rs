@@ -110,3 +110,23 @@ pub fn assert_bad_input(args: &[&str], expected: &[&str]) {
         );
     }
 }
+
+/// The scratch folder `group/name` under the tests' temporary directory, created if absent.
+pub fn scratch_dir(group: &str, name: &str) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+        .join(group)
+        .join(name);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Runs the binary, asserts success and returns its standard output.
+pub fn run_ok(args: &[&str]) -> String {
+    let out = thermostamp(args);
+    assert!(
+        out.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).unwrap()
+}
