@@ -3,7 +3,10 @@
 
 use crate::fit::card_section::{matrix_section, replace_fabric_shear, replace_matrix_section};
 use crate::fit::matrix::{fit_matrix, uniaxial_stress, BulkRule, Eta1, TemperatureFit};
-use crate::fit::shear::{fit_shear, read_force_curve, ShearFit, ShearTest};
+use crate::fit::shear::{
+    fit_shear, read_force_curve, shear_points, ForceCurve, ShearFit, ShearPoint, ShearTest,
+};
+use crate::fit::shear_matrix::{matrix_layers, subtract_matrix, TestConditions};
 use crate::fit::tension_data::{read_manifest, TensionCurve};
 use crate::io::plot::{write_png, LinePlot, LineStyle, Series};
 use crate::material::{MaterialCard, TemperatureTable};
@@ -34,8 +37,8 @@ pub enum ShearTestKind {
     shear force of Cao et al. 2008 is solved recursively from small angles (MODEL.md §5).\n\
     Picture frame: --frame-side L (pin to pin) [--fabric-side, default L].\n\
     Model: F_sh(gamma) = 2 t_B sin(gamma) W_s'(sin^2 gamma), W_s = sum_k c_k I10^k.\n\
-    The card must be a dry fabric (stack = [\"fabric\"]): subtracting matrix layers is not\n\
-    implemented."
+    A card with matrix layers (a prepreg) needs --temperature and --speed of the test: the\n\
+    layers' force, driven through the test's pin-jointed kinematics, is subtracted first."
 )]
 pub struct ShearArgs {
     /// Force–displacement curve (CSV).
@@ -61,6 +64,12 @@ pub struct ShearArgs {
     /// Where to write the card (may be the same file as --card).
     #[arg(long)]
     output: PathBuf,
+    /// Temperature of the test (°C); needed when the card has matrix layers.
+    #[arg(long, allow_negative_numbers = true)]
+    temperature: Option<f64>,
+    /// Crosshead speed of the test (mm/s); needed when the card has matrix layers.
+    #[arg(long, allow_negative_numbers = true)]
+    speed: Option<f64>,
     /// Number of coefficients c_1..c_m.
     #[arg(long, default_value_t = 3)]
     terms: usize,
@@ -122,29 +131,95 @@ fn run_shear(args: &ShearArgs) -> anyhow::Result<()> {
         );
     }
     let (text, card) = read_card(&args.card)?;
-    let thickness = dry_fabric_thickness(&card, &args.card)?;
-    let curve = read_force_curve(&args.data)?;
+    let thickness = fabric_thickness(&card, &args.card)?;
+    let measured = read_force_curve(&args.data)?;
+    let matrix = matrix_share(args, &card, &measured, &test)?;
+    let curve = matrix.as_ref().map_or(&measured, |m| &m.fabric);
     let fit = fit_shear(
-        &curve,
+        curve,
         &test,
         thickness,
         args.terms,
         args.max_shear.to_radians(),
     )?;
     let origin = args.output.display().to_string();
+    let provenance = shear_provenance(args, &fit, matrix.as_ref());
     let written =
-        replace_fabric_shear(&text, &fit.result.parameters, &shear_provenance(args, &fit))
-            .ok_or_else(|| {
-                anyhow::anyhow!("{}: no [fabric] shear key to replace", args.card.display())
-            })?;
+        replace_fabric_shear(&text, &fit.result.parameters, &provenance).ok_or_else(|| {
+            anyhow::anyhow!("{}: no [fabric] shear key to replace", args.card.display())
+        })?;
     // The card must still load; anything else is a bug here, caught before writing.
     MaterialCard::from_toml(&written, &origin)?;
     std::fs::write(&args.output, &written).with_context(|| format!("cannot write {origin}"))?;
-    print_shear_table(&fit);
+    print_shear_table(&fit, matrix.as_ref());
     if let Some(png) = &args.plot {
-        write_png(png, &shear_plot(&fit, thickness, args.max_shear), 900, 600)?;
+        let matrix_points = match &matrix {
+            Some(m) => matrix_points(&measured, m, &test, args.max_shear.to_radians())?,
+            None => Vec::new(),
+        };
+        let plot = shear_plot(&fit, &matrix_points, thickness, args.max_shear);
+        write_png(png, &plot, 900, 600)?;
     }
     Ok(())
+}
+
+/// The fabric's part of a prepreg's curve and the matrix layers' part (MODEL.md §5).
+struct MatrixShare {
+    fabric: ForceCurve,
+    force: Vec<f64>,
+    conditions: TestConditions,
+}
+
+/// The matrix layers' share of the measured force, for a card that has matrix layers; `None`
+/// for a dry fabric.
+fn matrix_share(
+    args: &ShearArgs,
+    card: &MaterialCard,
+    measured: &ForceCurve,
+    test: &ShearTest,
+) -> anyhow::Result<Option<MatrixShare>> {
+    let Some(layers) = matrix_layers(&card.laminate) else {
+        return Ok(None);
+    };
+    let (Some(temperature), Some(speed)) = (args.temperature, args.speed) else {
+        anyhow::bail!(
+            "{}: the card has matrix layers; their share of the force is subtracted at the \
+             test's temperature and crosshead speed: give --temperature (°C) and --speed (mm/s)",
+            args.card.display()
+        );
+    };
+    if !(speed.is_finite() && speed > 0.0) {
+        anyhow::bail!("--speed {speed}: the crosshead speed must be positive (mm/s)");
+    }
+    let conditions = TestConditions { temperature, speed };
+    let (fabric, force) = subtract_matrix(measured, &layers, test, conditions).map_err(|e| {
+        anyhow::anyhow!(
+            "{}: the matrix layers at {temperature} °C: {e}",
+            args.card.display()
+        )
+    })?;
+    Ok(Some(MatrixShare {
+        fabric,
+        force,
+        conditions,
+    }))
+}
+
+/// The matrix layers' force normalised like the data, up to `max_shear` (for the plot).
+fn matrix_points(
+    measured: &ForceCurve,
+    matrix: &MatrixShare,
+    test: &ShearTest,
+    max_shear: f64,
+) -> anyhow::Result<Vec<ShearPoint>> {
+    let curve = ForceCurve {
+        force: matrix.force.clone(),
+        ..measured.clone()
+    };
+    Ok(shear_points(&curve, test)?
+        .into_iter()
+        .filter(|p| p.gamma <= max_shear)
+        .collect())
 }
 
 fn shear_test(args: &ShearArgs) -> anyhow::Result<ShearTest> {
@@ -165,28 +240,27 @@ fn shear_test(args: &ShearArgs) -> anyhow::Result<ShearTest> {
     Ok(test)
 }
 
-/// The fabric layer's thickness t_B of a dry-fabric card; cards with matrix layers are refused
-/// (their share of the measured force would have to be subtracted first, MODEL.md §5).
-fn dry_fabric_thickness(card: &MaterialCard, path: &Path) -> anyhow::Result<f64> {
-    match card.laminate.layers() {
-        [layer] if layer.law.name() == "fabric" => Ok(layer.thickness),
-        layers => anyhow::bail!(
-            "{}: the stack has {} layers ({}): fitting the shear of a card with matrix layers \
-             needs their contribution subtracted (MODEL.md §5), which is not implemented; \
-             fit a dry-fabric card (stack = [\"fabric\"])",
+/// The fabric layer's thickness t_B: the card's stack must have exactly one fabric layer.
+fn fabric_thickness(card: &MaterialCard, path: &Path) -> anyhow::Result<f64> {
+    let fabric: Vec<f64> = card
+        .laminate
+        .layers()
+        .iter()
+        .filter(|l| l.law.name() == "fabric")
+        .map(|l| l.thickness)
+        .collect();
+    match fabric[..] {
+        [thickness] => Ok(thickness),
+        _ => anyhow::bail!(
+            "{}: the stack has {} fabric layers; the shear fit needs exactly one",
             path.display(),
-            layers.len(),
-            layers
-                .iter()
-                .map(|l| l.law.name())
-                .collect::<Vec<_>>()
-                .join(", ")
+            fabric.len()
         ),
     }
 }
 
 /// Comment lines above the written `shear` key: what it was fitted from and how.
-fn shear_provenance(args: &ShearArgs, fit: &ShearFit) -> Vec<String> {
+fn shear_provenance(args: &ShearArgs, fit: &ShearFit, matrix: Option<&MatrixShare>) -> Vec<String> {
     let test = match args.test {
         ShearTestKind::BiasExtension => format!(
             "bias extension {} x {} mm",
@@ -204,23 +278,28 @@ fn shear_provenance(args: &ShearArgs, fit: &ShearFit) -> Vec<String> {
         .iter()
         .map(|e| format!("{e:.2e}"))
         .collect();
-    vec![
-        format!(
-            "Fitted by `thermostamp fit shear` (MODEL.md §5) to {} ({test}), {} points up to \
-             {}° of shear.",
-            args.data.display(),
-            fit.points.len(),
-            args.max_shear
-        ),
-        format!(
-            "Standard errors [{}] MPa; RMS misfit of F_sh {:.3e} N/mm.",
-            errors.join(", "),
-            fit.rms_force
-        ),
-    ]
+    let mut lines = vec![format!(
+        "Fitted by `thermostamp fit shear` (MODEL.md §5) to {} ({test}), {} points up to {}° \
+         of shear.",
+        args.data.display(),
+        fit.points.len(),
+        args.max_shear
+    )];
+    if let Some(m) = matrix {
+        lines.push(format!(
+            "The matrix layers' force at {} °C and {} mm/s was subtracted first.",
+            m.conditions.temperature, m.conditions.speed
+        ));
+    }
+    lines.push(format!(
+        "Standard errors [{}] MPa; RMS misfit of F_sh {:.3e} N/mm.",
+        errors.join(", "),
+        fit.rms_force
+    ));
+    lines
 }
 
-fn print_shear_table(fit: &ShearFit) {
+fn print_shear_table(fit: &ShearFit, matrix: Option<&MatrixShare>) {
     println!("{:>4}  {:>24}", "k", "c_k (MPa)");
     for (k, (c, e)) in fit
         .result
@@ -237,10 +316,27 @@ fn print_shear_table(fit: &ShearFit) {
         fit.rms_force,
         fit.result.rms_residual
     );
+    if let (Some(m), Some(last)) = (matrix, fit.points.last()) {
+        let i = m.fabric.lines.iter().position(|&l| l == last.line);
+        if let Some(i) = i {
+            let total = m.fabric.force[i] + m.force[i];
+            println!(
+                "matrix layers at {} °C, {} mm/s: {:.3} N of the {:.3} N measured at the last \
+                 fitted point (line {}), subtracted",
+                m.conditions.temperature, m.conditions.speed, m.force[i], total, last.line
+            );
+        }
+    }
 }
 
-/// Normalised shear force vs shear angle: data as dots, the fitted law as a line.
-fn shear_plot(fit: &ShearFit, thickness: f64, max_shear_deg: f64) -> LinePlot {
+/// Normalised shear force vs shear angle: data as dots, the fitted law as a line, and the
+/// subtracted matrix layers' share (if any) dashed.
+fn shear_plot(
+    fit: &ShearFit,
+    matrix: &[ShearPoint],
+    thickness: f64,
+    max_shear_deg: f64,
+) -> LinePlot {
     let data = fit
         .points
         .iter()
@@ -253,14 +349,29 @@ fn shear_plot(fit: &ShearFit, thickness: f64, max_shear_deg: f64) -> LinePlot {
             (g, law.normalised_shear_force(thickness, g.to_radians()))
         })
         .collect();
+    let label = if matrix.is_empty() {
+        "data"
+    } else {
+        "data less the matrix layers"
+    };
+    let mut series = vec![
+        Series::new(label, data, LineStyle::Markers).with_colour(0),
+        Series::new("model", model, LineStyle::Solid).with_colour(1),
+    ];
+    if !matrix.is_empty() {
+        let share = matrix
+            .iter()
+            .map(|p| (p.gamma.to_degrees(), p.force))
+            .collect();
+        series.push(
+            Series::new("matrix layers (subtracted)", share, LineStyle::Dashed).with_colour(2),
+        );
+    }
     LinePlot {
         title: "fit shear: data (dots), F_sh = 2 t sin(g) W_s'(sin^2 g) (line)".into(),
         x_label: "shear angle (°)".into(),
         y_label: "normalised shear force (N/mm)".into(),
-        series: vec![
-            Series::new("data", data, LineStyle::Markers).with_colour(0),
-            Series::new("model", model, LineStyle::Solid).with_colour(1),
-        ],
+        series,
     }
 }
 
