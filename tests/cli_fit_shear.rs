@@ -87,6 +87,21 @@ fn fits_the_shear_key_and_keeps_the_rest_of_the_card() {
             .collect()
     };
     assert_eq!(kept(&before), kept(&after));
+    // Fitting the written card again replaces the provenance comments instead of stacking them.
+    let refit = dir.join("refit.toml");
+    let mut again = args(
+        data.to_str().unwrap(),
+        output.to_str().unwrap(),
+        refit.to_str().unwrap(),
+    );
+    again.extend(["--terms", "3"]);
+    let out = thermostamp(&again);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(std::fs::read_to_string(&refit).unwrap(), after);
 }
 
 #[test]

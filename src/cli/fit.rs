@@ -1,7 +1,8 @@
 //! `thermostamp fit ...`: parameter identification from test curves (MODEL.md §5):
 //! `fit matrix` and `fit shear` here, `fit fabric-tension` in `fit_fabric_tension.rs`.
 
-use crate::fit::card_section::{matrix_section, replace_fabric_shear, replace_matrix_section};
+use crate::fit::card_key::{replace_key, toml_array, FIT_MARKER};
+use crate::fit::card_section::{matrix_section, replace_matrix_section};
 use crate::fit::matrix::{fit_matrix, uniaxial_stress, BulkRule, Eta1, TemperatureFit};
 use crate::fit::shear::{
     fit_shear, read_force_curve, shear_points, ForceCurve, ShearFit, ShearPoint, ShearTest,
@@ -144,10 +145,14 @@ fn run_shear(args: &ShearArgs) -> anyhow::Result<()> {
     )?;
     let origin = args.output.display().to_string();
     let provenance = shear_provenance(args, &fit, matrix.as_ref());
-    let written =
-        replace_fabric_shear(&text, &fit.result.parameters, &provenance).ok_or_else(|| {
-            anyhow::anyhow!("{}: no [fabric] shear key to replace", args.card.display())
-        })?;
+    let written = replace_key(
+        &text,
+        "fabric",
+        "shear",
+        &toml_array(&fit.result.parameters),
+        &provenance,
+    )
+    .map_err(|e| anyhow::anyhow!("{}: {e}", args.card.display()))?;
     // The card must still load; anything else is a bug here, caught before writing.
     MaterialCard::from_toml(&written, &origin)?;
     std::fs::write(&args.output, &written).with_context(|| format!("cannot write {origin}"))?;
@@ -259,7 +264,8 @@ fn fabric_thickness(card: &MaterialCard, path: &Path) -> anyhow::Result<f64> {
     }
 }
 
-/// Comment lines above the written `shear` key: what it was fitted from and how.
+/// Comment lines above the written `shear` key: what it was fitted from and how; the first
+/// starts with [`FIT_MARKER`] so that a re-fit replaces them.
 fn shear_provenance(args: &ShearArgs, fit: &ShearFit, matrix: Option<&MatrixShare>) -> Vec<String> {
     let test = match args.test {
         ShearTestKind::BiasExtension => format!(
@@ -279,8 +285,7 @@ fn shear_provenance(args: &ShearArgs, fit: &ShearFit, matrix: Option<&MatrixShar
         .map(|e| format!("{e:.2e}"))
         .collect();
     let mut lines = vec![format!(
-        "Fitted by `thermostamp fit shear` (MODEL.md §5) to {} ({test}), {} points up to {}° \
-         of shear.",
+        "{FIT_MARKER} shear` (MODEL.md §5) to {} ({test}), {} points up to {}° of shear.",
         args.data.display(),
         fit.points.len(),
         args.max_shear

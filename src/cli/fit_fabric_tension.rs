@@ -1,7 +1,7 @@
 //! `thermostamp fit fabric-tension`: the yarn tension coefficients `A_k` of a card's `[fabric]`
 //! from strip tension tests along warp and weft (MODEL.md §3, §5).
 
-use crate::fit::card_key::replace_key;
+use crate::fit::card_key::{replace_key, toml_array, FIT_MARKER};
 use crate::fit::fabric_tension::{fit_yarn_tension, strip_force_per_width, TensionFit};
 use crate::fit::strip_data::{read_strip_curve, StripCurve};
 use crate::io::plot::{write_png, LinePlot, LineStyle, Series};
@@ -99,12 +99,12 @@ fn fabric_thickness(card: &MaterialCard) -> anyhow::Result<f64> {
         .context("the card's laminate has no fabric layer")
 }
 
-/// Comment lines above the written key.
+/// Comment line above the written key; it starts with [`FIT_MARKER`] so that a re-fit
+/// replaces it.
 fn provenance(d: &DirectionFit, thickness: f64) -> Vec<String> {
     vec![format!(
-        "{} fitted by `thermostamp fit fabric-tension` (MODEL.md §5, t_B = {thickness} mm) to \
-         {} points of {}: standard errors [{}] MPa, RMS residual {:.3e} N/mm.",
-        d.key,
+        "{FIT_MARKER} fabric-tension` (MODEL.md §5, t_B = {thickness} mm) to {} points of {}: \
+         standard errors [{}] MPa, RMS residual {:.3e} N/mm.",
         d.fit.points,
         Path::new(&d.curve.origin).display(),
         d.fit
@@ -115,18 +115,6 @@ fn provenance(d: &DirectionFit, thickness: f64) -> Vec<String> {
             .join(", "),
         d.fit.rms_residual
     )]
-}
-
-/// `[a, b, ...]` with each value to 6 significant digits, always a TOML float.
-fn toml_array(values: &[f64]) -> String {
-    let floats: Vec<String> = values
-        .iter()
-        .map(|v| {
-            let rounded: f64 = format!("{v:.5e}").parse().unwrap_or(*v);
-            format!("{rounded:?}")
-        })
-        .collect();
-    format!("[{}]", floats.join(", "))
 }
 
 fn print_table(fits: &[DirectionFit]) {

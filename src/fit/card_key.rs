@@ -1,22 +1,31 @@
 //! One key of one section of a material card replaced in the card's text, for fits that set a
-//! few keys of a section (`warp_tension`, `weft_tension`, later `shear` of `[fabric]`) rather
-//! than a whole section (see [`super::card_section`]). Only the value changes (it may span
-//! several lines, as an array can); everything else, comments included, stays byte for byte.
+//! few keys of a section (`warp_tension`, `weft_tension`, `shear` of `[fabric]`) rather than a
+//! whole section (see [`super::card_section`]). Only the value and the fit's provenance
+//! comments above it change (the value may span several lines, as an array can); everything
+//! else, the user's comments included, stays byte for byte.
+
+/// How the provenance a fit writes above a key begins (its first comment line, after `# `).
+/// A re-fit recognises its earlier provenance by it and replaces it instead of stacking a
+/// second one, so running a fit on its own output gives the same card.
+pub const FIT_MARKER: &str = "Fitted by `thermostamp fit";
 
 /// `card` with the value of `key` in the table `[section]` replaced by `value` (TOML text,
-/// e.g. `[4.0e4, 2.0e6]`), and `comment` lines (without `#`) put just above the key. A key the
-/// section lacks is added at the end of the section. Errors: no such section, or a value that
-/// does not end (an unclosed array).
+/// e.g. `[4.0e4, 2.0e6]`), and `provenance` lines (without `#`; the first one starting with
+/// [`FIT_MARKER`]) put as comments just above the key. Dropped with the old value: a comment
+/// after it on its last line, and an earlier fit's provenance (the comment lines above the key
+/// from the nearest one starting with [`FIT_MARKER`] down). A key the section lacks is added
+/// at the end of the section. Errors: no such section, or a value that does not end (an
+/// unclosed array).
 pub fn replace_key(
     card: &str,
     section: &str,
     key: &str,
     value: &str,
-    comment: &[String],
+    provenance: &[String],
 ) -> Result<String, String> {
     let (start, end) = section_span(card, section)
         .ok_or_else(|| format!("the card has no [{section}] section"))?;
-    let comment: String = comment.iter().map(|l| format!("# {l}\n")).collect();
+    let comment: String = provenance.iter().map(|l| format!("# {l}\n")).collect();
     let Some((line_start, value_start)) = key_position(card, start, end, key) else {
         let insert_at = end_of_content(card, start, end);
         let separator = if card[..insert_at].ends_with('\n') {
@@ -34,10 +43,59 @@ pub fn replace_key(
         .ok_or_else(|| format!("[{section}] {key}: the value does not end"))?;
     Ok(format!(
         "{}{comment}{}{value}{}",
-        &card[..line_start],
+        &card[..earlier_provenance(card, start, line_start)],
         &card[line_start..value_start],
-        &card[value_end..]
+        &card[trailing_comment_end(card, value_end)..]
     ))
+}
+
+/// Start of the provenance an earlier fit wrote above the key line at `key_line` (which is in
+/// the section body starting at `start`), or `key_line` when there is none: among the comment
+/// lines directly above the key, the nearest one starting with [`FIT_MARKER`]. Comments above
+/// it are the user's and stay.
+fn earlier_provenance(card: &str, start: usize, key_line: usize) -> usize {
+    let above = &card[start..key_line];
+    line_offsets(above)
+        .into_iter()
+        .rev()
+        .take_while(|&(s, e)| above[s..e].trim_start().starts_with('#'))
+        .find(|&(s, e)| is_fit_marker(&above[s..e]))
+        .map_or(key_line, |(s, _)| start + s)
+}
+
+/// Whether `line` is the first comment line of a fit's provenance.
+fn is_fit_marker(line: &str) -> bool {
+    line.trim_start()
+        .strip_prefix('#')
+        .is_some_and(|comment| comment.trim_start().starts_with(FIT_MARKER))
+}
+
+/// Where the text after the value ending at `value_end` is kept from: the end of its line
+/// (before the newline) when only spaces and a comment follow the value, which then go with
+/// it; `value_end` otherwise.
+fn trailing_comment_end(card: &str, value_end: usize) -> usize {
+    let line_end = card[value_end..]
+        .find('\n')
+        .map_or(card.len(), |i| value_end + i);
+    let rest = card[value_end..line_end].trim_end_matches('\r');
+    let after = rest.trim_start();
+    if after.is_empty() || after.starts_with('#') {
+        value_end + rest.len()
+    } else {
+        value_end
+    }
+}
+
+/// `v` to 6 significant digits, always a TOML float (`280.0`, `0.000294`, `1.25e-3`).
+pub fn toml_float(v: f64) -> String {
+    let rounded: f64 = format!("{v:.5e}").parse().unwrap_or(v);
+    format!("{rounded:?}")
+}
+
+/// `[a, b, ...]`, each a [`toml_float`]: the value of a fitted coefficient key.
+pub fn toml_array(values: &[f64]) -> String {
+    let floats: Vec<String> = values.iter().map(|&v| toml_float(v)).collect();
+    format!("[{}]", floats.join(", "))
 }
 
 /// Byte range of the body of `[section]`: from after its header line to the start of the next
@@ -150,21 +208,72 @@ mod tests {
 
     const CARD: &str = "[layers]\nwarp_tension = 1\n\n[fabric]\n# A_k\nwarp_tension = [4.0e4,\n  2.0e6] # MPa\nweft_tension = [1.0]\nshear = [0.25] # c_k\n\n[bending]\nwarp = 1.0\n";
 
+    /// Provenance as a fit writes it: the marker line, then details.
+    fn fitted(run: &str) -> Vec<String> {
+        vec![
+            format!("{FIT_MARKER} shear` to {run}.csv"),
+            format!("Standard errors of {run}"),
+        ]
+    }
+
     #[test]
     fn replaces_only_the_value_of_the_key_in_its_section() {
-        let out = replace_key(CARD, "fabric", "warp_tension", "[5.0, 6.0]", &[]).unwrap();
+        let out = replace_key(CARD, "fabric", "weft_tension", "[5.0]", &[]).unwrap();
         assert_eq!(
             out,
-            CARD.replace("[4.0e4,\n  2.0e6]", "[5.0, 6.0]"),
-            "{out}"
-        );
-        let out = replace_key(CARD, "fabric", "shear", "[1.0, 2.0]", &["fitted".into()]).unwrap();
-        assert_eq!(
-            out,
-            CARD.replace("shear = [0.25]", "# fitted\nshear = [1.0, 2.0]")
+            CARD.replace("weft_tension = [1.0]", "weft_tension = [5.0]")
         );
         let out = replace_key(CARD, "bending", "warp", "2.0", &[]).unwrap();
         assert_eq!(out, CARD.replace("warp = 1.0", "warp = 2.0"));
+        let out = replace_key("[a]\n  k=1.0   \n", "a", "k", "2.0", &[]).unwrap();
+        assert_eq!(out, "[a]\n  k=2.0\n");
+    }
+
+    #[test]
+    fn a_multi_line_array_and_its_trailing_comment_are_replaced() {
+        let out = replace_key(CARD, "fabric", "warp_tension", "[5.0, 6.0]", &[]).unwrap();
+        assert_eq!(
+            out,
+            CARD.replace("[4.0e4,\n  2.0e6] # MPa", "[5.0, 6.0]"),
+            "{out}"
+        );
+        let out = replace_key(CARD, "fabric", "shear", "[1.0, 2.0]", &fitted("a")).unwrap();
+        assert_eq!(
+            out,
+            CARD.replace(
+                "shear = [0.25] # c_k",
+                "# Fitted by `thermostamp fit shear` to a.csv\n# Standard errors of a\nshear = [1.0, 2.0]"
+            )
+        );
+        let crlf = "[a]\r\nk = [1, # one\r\n  2] # two\r\nm = 3\r\n";
+        let out = replace_key(crlf, "a", "k", "[4]", &[]).unwrap();
+        assert_eq!(out, "[a]\r\nk = [4]\r\nm = 3\r\n");
+    }
+
+    /// Fitting a fit's output again gives what fitting the original once gives.
+    #[test]
+    fn a_re_fit_replaces_the_earlier_provenance_instead_of_stacking_it() {
+        for key in ["shear", "warp_tension", "compression_fraction"] {
+            let once = replace_key(CARD, "fabric", key, "[2.0]", &fitted("b")).unwrap();
+            let first = replace_key(CARD, "fabric", key, "[1.0]", &fitted("a")).unwrap();
+            let twice = replace_key(&first, "fabric", key, "[2.0]", &fitted("b")).unwrap();
+            assert_eq!(twice, once, "{key}");
+            let again = replace_key(&once, "fabric", key, "[2.0]", &fitted("b")).unwrap();
+            assert_eq!(again, once, "{key}");
+        }
+    }
+
+    #[test]
+    fn user_comments_above_the_provenance_and_other_keys_provenance_stay() {
+        let card = "[fabric]\n# Fitted by `thermostamp fit fabric-tension` w\nwarp = [1.0]\n# user note\n# Fitted by `thermostamp fit shear` old\n# Standard errors old\nshear = [1.0]\n";
+        let out = replace_key(card, "fabric", "shear", "[2.0]", &fitted("new")).unwrap();
+        assert_eq!(
+            out,
+            "[fabric]\n# Fitted by `thermostamp fit fabric-tension` w\nwarp = [1.0]\n# user note\n# Fitted by `thermostamp fit shear` to new.csv\n# Standard errors of new\nshear = [2.0]\n"
+        );
+        // A user comment with no fit's marker, right above the key, is not provenance.
+        let out = replace_key(CARD, "fabric", "warp_tension", "[3.0]", &fitted("a")).unwrap();
+        assert!(out.contains("# A_k\n# Fitted by"), "{out}");
     }
 
     #[test]
@@ -174,8 +283,8 @@ mod tests {
             out,
             CARD.replace("# c_k\n", "# c_k\ncompression_fraction = 0.01\n")
         );
-        let out = replace_key("[fabric]\na = 1", "fabric", "b", "2", &[]).unwrap();
-        assert_eq!(out, "[fabric]\na = 1\nb = 2\n");
+        let out = replace_key("[fabric]\na = 1", "fabric", "b", "2", &["fit".into()]).unwrap();
+        assert_eq!(out, "[fabric]\na = 1\n# fit\nb = 2\n");
         assert!(replace_key(CARD, "matrix", "c10", "[1.0]", &[])
             .unwrap_err()
             .contains("no [matrix] section"));
@@ -184,5 +293,14 @@ mod tests {
                 .unwrap_err()
                 .contains("does not end")
         );
+    }
+
+    #[test]
+    fn floats_are_toml_floats() {
+        assert_eq!(toml_float(280.0), "280.0");
+        assert_eq!(toml_float(0.000294123456), "0.000294123");
+        assert_eq!(toml_float(1.0 / 750.0), "0.00133333");
+        assert_eq!(toml_array(&[1.0, 2.5e-7]), "[1.0, 2.5e-7]");
+        assert_eq!(toml_array(&[]), "[]");
     }
 }

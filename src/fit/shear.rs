@@ -17,7 +17,7 @@ use crate::experiment::kinematics::{
     bias_extension_normalised_shear_force, bias_extension_shear_angle, picture_frame_angles,
     picture_frame_normalised_force,
 };
-use crate::io::csv_table::parse_csv_table;
+use crate::io::xy_curve::{parse_xy_curve, read_curve_text, CurveLayout};
 use crate::io::InputError;
 use crate::material::fabric::ShearInteraction;
 use nalgebra::{DMatrix, DVector};
@@ -76,59 +76,37 @@ impl ShearFit {
     }
 }
 
+/// Columns of a force–displacement curve file.
+const LAYOUT: CurveLayout = CurveLayout {
+    x_names: &[DISPLACEMENT_COLUMN],
+    y_names: &[FORCE_COLUMN],
+    expected: "displacement_mm (crosshead, mm) and force_N (N)",
+    why_increasing: "the normalisation needs a monotonic loading curve",
+    why_non_negative: "a shear test pulls, forces are >= 0",
+};
+
 /// Reads and checks the force–displacement curve at `path`.
 pub fn read_force_curve(path: &Path) -> Result<ForceCurve, InputError> {
-    let origin = path.display().to_string();
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| InputError::in_file(&origin, format!("cannot read the curve: {e}")))?;
+    let (origin, text) = read_curve_text(path)?;
     parse_force_curve(&text, &origin)
 }
 
 /// Parses and checks the CSV `text` of a force–displacement curve; `origin` names it.
 pub fn parse_force_curve(text: &str, origin: &str) -> Result<ForceCurve, InputError> {
-    if text.trim().is_empty() {
-        return Err(InputError::in_file(origin, "the file is empty"));
+    let data = parse_xy_curve(text, origin, &LAYOUT)?;
+    if let Some((&d, &line)) = data.x.iter().zip(&data.lines).find(|(&d, _)| d < 0.0) {
+        return Err(InputError::at_line(
+            origin,
+            line,
+            format!("{DISPLACEMENT_COLUMN} = {d} is negative: the crosshead pulls from 0"),
+        ));
     }
-    let table = parse_csv_table(text, origin, &[DISPLACEMENT_COLUMN, FORCE_COLUMN])?;
-    let mut curve = ForceCurve {
+    Ok(ForceCurve {
         origin: origin.to_string(),
-        lines: Vec::with_capacity(table.rows.len()),
-        displacement: Vec::with_capacity(table.rows.len()),
-        force: Vec::with_capacity(table.rows.len()),
-    };
-    for (row, &line) in table.rows.iter().zip(&table.lines) {
-        let (d, f) = (row[0], row[1]);
-        if d < 0.0 {
-            return Err(InputError::at_line(
-                origin,
-                line,
-                format!("{DISPLACEMENT_COLUMN} = {d} is negative: the crosshead pulls from 0"),
-            ));
-        }
-        if let Some(&previous) = curve.displacement.last() {
-            if d <= previous {
-                return Err(InputError::at_line(
-                    origin,
-                    line,
-                    format!(
-                        "{DISPLACEMENT_COLUMN} = {d} does not increase (previous {previous}): \
-                         the normalisation needs a monotonic loading curve"
-                    ),
-                ));
-            }
-        }
-        if f < 0.0 {
-            return Err(InputError::at_line(
-                origin,
-                line,
-                format!("{FORCE_COLUMN} = {f} is negative: a shear test pulls, forces are >= 0"),
-            ));
-        }
-        curve.lines.push(line);
-        curve.displacement.push(d);
-        curve.force.push(f);
-    }
-    Ok(curve)
+        lines: data.lines,
+        displacement: data.x,
+        force: data.y,
+    })
 }
 
 impl ShearTest {
@@ -370,8 +348,12 @@ mod tests {
             e.starts_with("b.csv: line 3: force_N = -0.5 is negative"),
             "{e}"
         );
+        assert_eq!(
+            error("displacement_mm,force_N\n-1,0\n0,1\n"),
+            "b.csv: line 2: displacement_mm = -1 is negative: the crosshead pulls from 0"
+        );
         let e = error("d,force_N\n0,0\n");
-        assert!(e.starts_with("b.csv: line 1:"), "{e}");
+        assert!(e.starts_with("b.csv: line 1: header 'd,force_N'"), "{e}");
     }
 
     #[test]

@@ -6,7 +6,7 @@
 //! and one of `force_per_width` (N/mm, the force over the reference width) or `force` (N, then
 //! the specimen width is given separately and the force divided by it).
 
-use crate::io::csv_table::parse_csv_table;
+use crate::io::xy_curve::{parse_xy_curve, read_curve_text, CurveLayout};
 use crate::io::InputError;
 use std::path::Path;
 
@@ -29,11 +29,18 @@ impl StripCurve {
     }
 }
 
+/// Columns of a strip curve file (see the module's documentation).
+const LAYOUT: CurveLayout = CurveLayout {
+    x_names: &["strain", "stretch"],
+    y_names: &["force_per_width", "force"],
+    expected: "strain or stretch, and force_per_width (N/mm) or force (N, with --width)",
+    why_increasing: "a strip test must stretch monotonically",
+    why_non_negative: "tension curves have forces >= 0",
+};
+
 /// Reads the strip curve at `path`; `width` (mm) converts a `force` column.
 pub fn read_strip_curve(path: &Path, width: Option<f64>) -> Result<StripCurve, InputError> {
-    let origin = path.display().to_string();
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| InputError::in_file(&origin, format!("cannot read the curve: {e}")))?;
+    let (origin, text) = read_curve_text(path)?;
     parse_strip_curve(&text, &origin, width)
 }
 
@@ -43,48 +50,25 @@ pub fn parse_strip_curve(
     origin: &str,
     width: Option<f64>,
 ) -> Result<StripCurve, InputError> {
-    if text.trim().is_empty() {
-        return Err(InputError::in_file(origin, "the file is empty"));
-    }
-    let (x_name, y_name) = column_names(text, origin)?;
-    let divisor = force_divisor(y_name, width, origin)?;
-    let table = parse_csv_table(text, origin, &[x_name, y_name])?;
+    let data = parse_xy_curve(text, origin, &LAYOUT)?;
+    let x_name = data.x_name;
+    let divisor = force_divisor(data.y_name, width, origin)?;
     let mut curve = StripCurve {
         origin: origin.to_string(),
-        stretch: Vec::with_capacity(table.rows.len()),
-        force_per_width: Vec::with_capacity(table.rows.len()),
+        stretch: Vec::with_capacity(data.x.len()),
+        force_per_width: Vec::with_capacity(data.x.len()),
     };
-    for (row, &line) in table.rows.iter().zip(&table.lines) {
-        let stretch = if x_name == "strain" {
-            1.0 + row[0]
-        } else {
-            row[0]
-        };
-        let at = |message: String| InputError::at_line(origin, line, message);
+    for ((&x, &y), &line) in data.x.iter().zip(&data.y).zip(&data.lines) {
+        let stretch = if x_name == "strain" { 1.0 + x } else { x };
         if stretch <= 0.0 {
-            return Err(at(format!(
-                "{x_name} = {}: the stretch must be positive",
-                row[0]
-            )));
-        }
-        if curve
-            .stretch
-            .last()
-            .is_some_and(|&previous| stretch <= previous)
-        {
-            return Err(at(format!(
-                "{x_name} = {} does not increase: a strip test must stretch monotonically",
-                row[0]
-            )));
-        }
-        if row[1] < 0.0 {
-            return Err(at(format!(
-                "{y_name} = {} is negative: tension curves have forces >= 0",
-                row[1]
-            )));
+            return Err(InputError::at_line(
+                origin,
+                line,
+                format!("{x_name} = {x}: the stretch must be positive"),
+            ));
         }
         curve.stretch.push(stretch);
-        curve.force_per_width.push(row[1] / divisor);
+        curve.force_per_width.push(y / divisor);
     }
     if curve.tensile_points().is_empty() {
         return Err(InputError::in_file(
@@ -112,32 +96,6 @@ fn force_divisor(y_name: &str, width: Option<f64>, origin: &str) -> Result<f64, 
             origin,
             "the force column is in N: give the specimen width with --width (mm), or a \
              force_per_width column (N/mm)",
-        )),
-    }
-}
-
-/// Which of the accepted column names the header uses.
-fn column_names(text: &str, origin: &str) -> Result<(&'static str, &'static str), InputError> {
-    let (line, header) = text
-        .lines()
-        .enumerate()
-        .map(|(i, l)| (i + 1, l.trim()))
-        .find(|(_, l)| !l.is_empty() && !l.starts_with('#'))
-        .ok_or_else(|| InputError::in_file(origin, "the file has no header line and no data"))?;
-    let names: Vec<&str> = header.split(',').map(str::trim).collect();
-    let pick = |choices: [&'static str; 2]| choices.into_iter().find(|c| names.contains(c));
-    match (
-        pick(["strain", "stretch"]),
-        pick(["force_per_width", "force"]),
-    ) {
-        (Some(x), Some(y)) => Ok((x, y)),
-        _ => Err(InputError::at_line(
-            origin,
-            line,
-            format!(
-                "header '{header}': expected two columns, strain or stretch, and \
-                 force_per_width (N/mm) or force (N, with --width)"
-            ),
         )),
     }
 }

@@ -19,7 +19,7 @@
 //! `nominal_stress` (force over the initial section, MPa; converted with incompressibility,
 //! `sigma = lambda * P`).
 
-use crate::io::csv_table::parse_csv_table;
+use crate::io::xy_curve::{parse_xy_curve, read_curve_text, CurveLayout};
 use crate::io::{describe_toml_error, InputError};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
@@ -118,15 +118,22 @@ fn strain_rate(entry: &CurveEntry) -> Result<f64, String> {
     }
 }
 
+/// Columns of a tension curve file (see the module's documentation).
+const LAYOUT: CurveLayout = CurveLayout {
+    x_names: &["strain", "stretch"],
+    y_names: &["stress", "nominal_stress"],
+    expected: "strain or stretch, and stress (true, MPa) or nominal_stress (MPa)",
+    why_increasing: "a curve at constant crosshead speed must stretch monotonically",
+    why_non_negative: "tension curves have stresses >= 0",
+};
+
 /// Reads one curve file and checks it point by point.
 pub fn read_curve(
     path: &Path,
     temperature: f64,
     strain_rate: f64,
 ) -> Result<TensionCurve, InputError> {
-    let origin = path.display().to_string();
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| InputError::in_file(&origin, format!("cannot read the curve: {e}")))?;
+    let (origin, text) = read_curve_text(path)?;
     parse_curve(&text, &origin, temperature, strain_rate)
 }
 
@@ -137,87 +144,33 @@ pub fn parse_curve(
     temperature: f64,
     strain_rate: f64,
 ) -> Result<TensionCurve, InputError> {
-    if text.trim().is_empty() {
-        return Err(InputError::in_file(origin, "the file is empty"));
-    }
-    let (x_name, y_name) = column_names(text, origin)?;
-    let table = parse_csv_table(text, origin, &[x_name, y_name])?;
+    let data = parse_xy_curve(text, origin, &LAYOUT)?;
     let mut curve = TensionCurve {
         origin: origin.to_string(),
         temperature,
         strain_rate,
-        stretch: Vec::with_capacity(table.rows.len()),
-        stress: Vec::with_capacity(table.rows.len()),
+        stretch: Vec::with_capacity(data.x.len()),
+        stress: Vec::with_capacity(data.x.len()),
     };
-    for (row, &line) in table.rows.iter().zip(&table.lines) {
-        let stretch = if x_name == "strain" {
-            1.0 + row[0]
-        } else {
-            row[0]
-        };
+    for ((&x, &y), &line) in data.x.iter().zip(&data.y).zip(&data.lines) {
+        let stretch = if data.x_name == "strain" { 1.0 + x } else { x };
         if stretch <= 0.0 {
             return Err(InputError::at_line(
                 origin,
                 line,
-                format!("{x_name} = {}: the stretch must be positive", row[0]),
-            ));
-        }
-        if let Some(&previous) = curve.stretch.last() {
-            if stretch <= previous {
-                return Err(InputError::at_line(
-                    origin,
-                    line,
-                    format!(
-                        "{x_name} = {} does not increase: a curve at constant crosshead \
-                         speed must stretch monotonically",
-                        row[0]
-                    ),
-                ));
-            }
-        }
-        if row[1] < 0.0 {
-            return Err(InputError::at_line(
-                origin,
-                line,
-                format!(
-                    "{y_name} = {} is negative: tension curves have stresses >= 0",
-                    row[1]
-                ),
+                format!("{} = {x}: the stretch must be positive", data.x_name),
             ));
         }
         // Incompressible: the section shrinks as 1/lambda, so sigma = lambda P.
-        let stress = if y_name == "nominal_stress" {
-            stretch * row[1]
+        let stress = if data.y_name == "nominal_stress" {
+            stretch * y
         } else {
-            row[1]
+            y
         };
         curve.stretch.push(stretch);
         curve.stress.push(stress);
     }
     Ok(curve)
-}
-
-/// Which of the accepted column names the header uses.
-fn column_names(text: &str, origin: &str) -> Result<(&'static str, &'static str), InputError> {
-    let (line, header) = text
-        .lines()
-        .enumerate()
-        .map(|(i, l)| (i + 1, l.trim()))
-        .find(|(_, l)| !l.is_empty() && !l.starts_with('#'))
-        .ok_or_else(|| InputError::in_file(origin, "the file has no header line and no data"))?;
-    let names: Vec<&str> = header.split(',').map(str::trim).collect();
-    let pick = |choices: [&'static str; 2]| choices.into_iter().find(|c| names.contains(c));
-    match (pick(["strain", "stretch"]), pick(["stress", "nominal_stress"])) {
-        (Some(x), Some(y)) => Ok((x, y)),
-        _ => Err(InputError::at_line(
-            origin,
-            line,
-            format!(
-                "header '{header}': expected two columns, strain or stretch, and stress (true, MPa) \
-                 or nominal_stress (MPa)"
-            ),
-        )),
-    }
 }
 
 #[cfg(test)]
@@ -258,6 +211,10 @@ mod tests {
         assert!(
             e.starts_with("c.csv: line 3: stress = -1 is negative"),
             "{e}"
+        );
+        assert_eq!(
+            error("strain,stress\n-1,0\n0,1\n"),
+            "c.csv: line 2: strain = -1: the stretch must be positive"
         );
         let e = error("x,stress\n0,0\n");
         assert!(e.starts_with("c.csv: line 1: header 'x,stress'"), "{e}");

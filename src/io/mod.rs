@@ -4,6 +4,7 @@ pub mod csv_table;
 pub mod plot;
 pub mod sheet_frame;
 pub mod vtk;
+pub mod xy_curve;
 
 pub use csv_table::{read_csv_table, write_csv, CsvTable};
 
