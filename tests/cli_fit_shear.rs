@@ -140,7 +140,7 @@ fn bad_input_gives_one_line_naming_the_file() {
             assert!(stderr.contains(e), "{name}: {stderr}");
         }
     }
-    // H/W < 2, and a card with matrix layers
+    // H/W < 2, and a card with matrix layers without the test's conditions or outside them
     let data = synthetic_curve(&dir);
     let data = data.to_str().unwrap();
     let mut short = args(data, card, output);
@@ -154,7 +154,15 @@ fn bad_input_gives_one_line_naming_the_file() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2));
     assert!(
-        stderr.contains("t300-5hs-pps.toml") && stderr.contains("matrix layers"),
+        stderr.contains("t300-5hs-pps.toml")
+            && stderr.contains("matrix layers")
+            && stderr.contains("--temperature"),
         "{stderr}"
     );
+    let mut prepreg = args(data, t300.to_str().unwrap(), output);
+    prepreg.extend(["--temperature", "300", "--speed", "-1"]);
+    common::assert_bad_input(&prepreg, &["--speed -1", "positive"]);
+    let mut too_hot = args(data, t300.to_str().unwrap(), output);
+    too_hot.extend(["--temperature", "400", "--speed", "1"]);
+    common::assert_bad_input(&too_hot, &["t300-5hs-pps.toml", "400"]);
 }

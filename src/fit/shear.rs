@@ -77,10 +77,12 @@ impl ShearFit {
 }
 
 /// Columns of a force–displacement curve file.
+/// `displacement` and `force` are the columns of `thermostamp test bias-extension` and
+/// `picture-frame` histories (mm, N), so a virtual test's curve is fitted as it is written.
 const LAYOUT: CurveLayout = CurveLayout {
-    x_names: &[DISPLACEMENT_COLUMN],
-    y_names: &[FORCE_COLUMN],
-    expected: "displacement_mm (crosshead, mm) and force_N (N)",
+    x_names: &[DISPLACEMENT_COLUMN, "displacement"],
+    y_names: &[FORCE_COLUMN, "force"],
+    expected: "displacement_mm (crosshead, mm) and force_N (N), or displacement and force",
     why_increasing: "the normalisation needs a monotonic loading curve",
     why_non_negative: "a shear test pulls, forces are >= 0",
 };

@@ -23,8 +23,36 @@ pub fn read_csv_table(path: &Path, columns: &[&str]) -> Result<CsvTable, InputEr
     parse_csv_table(&text, &origin, columns)
 }
 
-/// Parses CSV `text`; `origin` names it in messages.
+/// Parses CSV `text`, which must have exactly the columns `columns`; `origin` names it in
+/// messages.
 pub fn parse_csv_table(text: &str, origin: &str, columns: &[&str]) -> Result<CsvTable, InputError> {
+    parse(text, origin, columns, OtherColumns::Refused)
+}
+
+/// Parses CSV `text` for the columns `columns`, ignoring any others (a test machine's export
+/// has time, extension, ... beside the two a fit reads); a requested column that is missing is
+/// still an error, so a misspelt name does not go unnoticed.
+pub fn parse_csv_columns(
+    text: &str,
+    origin: &str,
+    columns: &[&str],
+) -> Result<CsvTable, InputError> {
+    parse(text, origin, columns, OtherColumns::Ignored)
+}
+
+/// What a header column that was not asked for means.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum OtherColumns {
+    Refused,
+    Ignored,
+}
+
+fn parse(
+    text: &str,
+    origin: &str,
+    columns: &[&str],
+    others: OtherColumns,
+) -> Result<CsvTable, InputError> {
     let mut content = text
         .lines()
         .enumerate()
@@ -33,7 +61,8 @@ pub fn parse_csv_table(text: &str, origin: &str, columns: &[&str]) -> Result<Csv
     let (header_line, header) = content
         .next()
         .ok_or_else(|| InputError::in_file(origin, "the file has no header line and no data"))?;
-    let order = column_order(header, header_line, origin, columns)?;
+    let width = header.split(',').count();
+    let order = column_order(header, header_line, origin, columns, others)?;
     let mut table = CsvTable {
         origin: origin.to_string(),
         lines: Vec::new(),
@@ -41,11 +70,11 @@ pub fn parse_csv_table(text: &str, origin: &str, columns: &[&str]) -> Result<Csv
     };
     for (line, text) in content {
         let cells: Vec<&str> = text.split(',').map(str::trim).collect();
-        if cells.len() != columns.len() {
+        if cells.len() != width {
             return Err(InputError::at_line(
                 origin,
                 line,
-                format!("{} cells, the header has {}", cells.len(), columns.len()),
+                format!("{} cells, the header has {width}", cells.len()),
             ));
         }
         let row = order
@@ -71,10 +100,12 @@ fn column_order(
     line: usize,
     origin: &str,
     columns: &[&str],
+    others: OtherColumns,
 ) -> Result<Vec<usize>, InputError> {
     let names: Vec<&str> = header.split(',').map(str::trim).collect();
     let expected = columns.join(",");
-    if let Some(unknown) = names.iter().find(|n| !columns.contains(n)) {
+    let unknown = names.iter().find(|n| !columns.contains(n));
+    if let Some(unknown) = unknown.filter(|_| others == OtherColumns::Refused) {
         return Err(InputError::at_line(
             origin,
             line,
@@ -165,6 +196,18 @@ mod tests {
         assert_eq!(e.line, Some(2));
         assert!(parse_csv_table("# only\n", "h.csv", &["a"]).is_err());
         assert!(parse_csv_table("a\n", "h.csv", &["a"]).is_err());
+    }
+
+    #[test]
+    fn other_columns_can_be_ignored_but_requested_ones_must_be_there() {
+        let text = "time,b,note,a\n0,2.5,x,1\n1,4,y,3\n";
+        let t = parse_csv_columns(text, "h.csv", &["a", "b"]).unwrap();
+        assert_eq!(t.rows, vec![vec![1.0, 2.5], vec![3.0, 4.0]]);
+        assert!(parse_csv_table(text, "h.csv", &["a", "b"]).is_err());
+        let e = parse_csv_columns(text, "h.csv", &["a", "c"]).unwrap_err();
+        assert!(e.to_string().contains("missing column 'c'"), "{e}");
+        let e = parse_csv_columns("a,b,c\n1,2\n", "h.csv", &["a"]).unwrap_err();
+        assert_eq!(e.line, Some(2));
     }
 
     #[test]

@@ -4,7 +4,7 @@
 //! curve needs (a header with one of the accepted names per column, `x` increasing, `y >= 0`)
 //! live here once. Every error names the file, and the line where there is one.
 
-use super::csv_table::parse_csv_table;
+use super::csv_table::parse_csv_columns;
 use super::InputError;
 use std::path::Path;
 
@@ -15,7 +15,7 @@ pub struct CurveLayout {
     pub x_names: &'static [&'static str],
     /// Names the `y` column may have, likewise.
     pub y_names: &'static [&'static str],
-    /// End of a bad header's message, after "expected two columns, ".
+    /// End of a bad header's message, after "expected the columns ".
     pub expected: &'static str,
     /// Why `x` must increase, ending that message.
     pub why_increasing: &'static str,
@@ -54,7 +54,7 @@ pub fn parse_xy_curve(
         return Err(InputError::in_file(origin, "the file is empty"));
     }
     let (x_name, y_name) = column_names(text, origin, layout)?;
-    let table = parse_csv_table(text, origin, &[x_name, y_name])?;
+    let table = parse_csv_columns(text, origin, &[x_name, y_name])?;
     let mut curve = XyCurve {
         x_name,
         y_name,
@@ -85,7 +85,7 @@ pub fn parse_xy_curve(
 }
 
 /// Which of the accepted column names the header (the first line that is neither blank nor a
-/// comment) uses.
+/// comment) uses; other columns are ignored, but two names for the same column are an error.
 fn column_names(
     text: &str,
     origin: &str,
@@ -98,17 +98,28 @@ fn column_names(
         .find(|(_, l)| !l.is_empty() && !l.starts_with('#'))
         .ok_or_else(|| InputError::in_file(origin, "the file has no header line and no data"))?;
     let names: Vec<&str> = header.split(',').map(str::trim).collect();
-    let pick = |choices: &[&'static str]| choices.iter().copied().find(|c| names.contains(c));
-    match (pick(layout.x_names), pick(layout.y_names)) {
+    let error = |message: String| InputError::at_line(origin, line, message);
+    let pick = |choices: &[&'static str]| {
+        let found: Vec<&'static str> = choices
+            .iter()
+            .copied()
+            .filter(|c| names.contains(c))
+            .collect();
+        match found[..] {
+            [] => Ok(None),
+            [name] => Ok(Some(name)),
+            _ => Err(error(format!(
+                "header '{header}': the columns {} are the same quantity; keep one",
+                found.join(" and ")
+            ))),
+        }
+    };
+    match (pick(layout.x_names)?, pick(layout.y_names)?) {
         (Some(x), Some(y)) => Ok((x, y)),
-        _ => Err(InputError::at_line(
-            origin,
-            line,
-            format!(
-                "header '{header}': expected two columns, {}",
-                layout.expected
-            ),
-        )),
+        _ => Err(error(format!(
+            "header '{header}': expected the columns {} (others are ignored)",
+            layout.expected
+        ))),
     }
 }
 
@@ -168,12 +179,18 @@ mod tests {
         );
         assert_eq!(
             error("\nx,stress\n0,0\n"),
-            "c.csv: line 2: header 'x,stress': expected two columns, strain or stretch, and stress"
+            "c.csv: line 2: header 'x,stress': expected the columns strain or stretch, and \
+             stress (others are ignored)"
         );
         let e = error("strain,stretch,stress\n0,1,0\n");
         assert!(
-            e.starts_with("c.csv: line 1: unexpected column 'stretch'"),
+            e.starts_with(
+                "c.csv: line 1: header 'strain,stretch,stress': the columns strain and \
+                           stretch are the same quantity"
+            ),
             "{e}"
         );
+        let c = parse_xy_curve("time,stress,strain\n0,0,0\n1,2,0.1\n", "c.csv", &LAYOUT).unwrap();
+        assert_eq!((c.x, c.y), (vec![0.0, 0.1], vec![0.0, 2.0]));
     }
 }
