@@ -1,7 +1,10 @@
-//! Meshes of the blank: reference node positions, 3-node triangles and named node sets.
+//! Meshes of the blank: reference node positions, 3-node triangles, named node and element
+//! sets, and where a mesh file gives them, reference warp directions per triangle.
 
+pub mod file;
 pub mod rectangle;
 
+pub use file::{MeshFileError, MeshImport};
 pub use rectangle::{rectangle, DiagonalPattern};
 
 use nalgebra::Vector3;
@@ -16,6 +19,12 @@ pub struct Mesh {
     pub triangles: Vec<[usize; 3]>,
     /// Named groups of nodes for boundary conditions and reactions.
     pub node_sets: BTreeMap<String, Vec<usize>>,
+    /// Named groups of triangles (Abaqus `*ELSET`, Gmsh physical groups).
+    pub element_sets: BTreeMap<String, Vec<usize>>,
+    /// Reference direction of the warp per triangle, where the mesh file gives one (Abaqus
+    /// `*ORIENTATION`); it is projected onto each triangle's plane. `None`: the scenario's ply
+    /// angle decides.
+    pub warp_directions: Option<Vec<Vector3<f64>>>,
 }
 
 /// What is wrong with a mesh.
@@ -35,6 +44,17 @@ pub enum MeshError {
     NonFinite { node: usize },
     #[error("no node set named '{name}' (the mesh has: {available})")]
     UnknownSet { name: String, available: String },
+    #[error("{kind} set '{name}' refers to {kind} {index}, but the mesh has {count}")]
+    SetOutOfRange {
+        kind: &'static str,
+        name: String,
+        index: usize,
+        count: usize,
+    },
+    #[error("{count} warp directions for {triangles} triangles")]
+    WarpDirectionCount { count: usize, triangles: usize },
+    #[error("triangle {triangle} has a zero or non-finite warp direction")]
+    BadWarpDirection { triangle: usize },
 }
 
 impl Mesh {
@@ -62,6 +82,22 @@ impl Mesh {
             let scale = (self.nodes[t[1]] - self.nodes[t[0]]).norm_squared();
             if area.is_nan() || area <= 1e-12 * scale {
                 return Err(MeshError::Degenerate { triangle, area });
+            }
+        }
+        check_sets("node", &self.node_sets, self.nodes.len())?;
+        check_sets("element", &self.element_sets, self.triangles.len())?;
+        if let Some(directions) = &self.warp_directions {
+            if directions.len() != self.triangles.len() {
+                return Err(MeshError::WarpDirectionCount {
+                    count: directions.len(),
+                    triangles: self.triangles.len(),
+                });
+            }
+            if let Some(triangle) = directions
+                .iter()
+                .position(|d| !(d.iter().all(|c| c.is_finite()) && d.norm() > 0.0))
+            {
+                return Err(MeshError::BadWarpDirection { triangle });
             }
         }
         Ok(())
@@ -94,4 +130,23 @@ impl Mesh {
                     .join(", "),
             })
     }
+}
+
+/// Every index of every set below `count`.
+fn check_sets(
+    kind: &'static str,
+    sets: &BTreeMap<String, Vec<usize>>,
+    count: usize,
+) -> Result<(), MeshError> {
+    for (name, members) in sets {
+        if let Some(&index) = members.iter().find(|&&i| i >= count) {
+            return Err(MeshError::SetOutOfRange {
+                kind,
+                name: name.clone(),
+                index,
+                count,
+            });
+        }
+    }
+    Ok(())
 }

@@ -77,6 +77,8 @@ pub fn rectangle(width: f64, length: f64, nx: usize, ny: usize, pattern: Diagona
         nodes,
         triangles,
         node_sets,
+        element_sets: BTreeMap::new(),
+        warp_directions: None,
     }
 }
 
