@@ -289,20 +289,24 @@ fn advance(
         let f_contact = state.contacts[a].force;
         let f = f_int - f_contact;
         let v_old = state.velocities[a];
+        let free = (v_old * (1.0 - half_damp) - f * (dt_mean / m)) / (1.0 + half_damp);
+        let held = held_components(*motion);
         let v_new = match motion {
-            None => (v_old * (1.0 - half_damp) - f * (dt_mean / m)) / (1.0 + half_damp),
-            Some(Motion::Fixed) => Vector3::zeros(),
             Some(Motion::Velocity(field)) => field(t_half, &model.mesh.nodes[a]),
+            _ => free.zip_map(&held, |v, h| if h { 0.0 } else { v }),
         };
-        let reaction = match motion {
-            None => Vector3::zeros(),
-            Some(_) => f + (v_new - v_old) * (m / dt_mean),
-        };
+        // The force the support puts on the node along the held directions.
+        let reaction =
+            (f + (v_new - v_old) * (m / dt_mean)).zip_map(&held, |r, h| if h { r } else { 0.0 });
         let v_mid = 0.5 * (v_old + v_new);
         kinetic += 0.5 * m * v_mid.norm_squared();
-        if motion.is_none() {
-            damping_work += damping * m * v_mid.norm_squared() * dt_mean;
-        }
+        let damped: f64 = v_mid
+            .iter()
+            .zip(&held)
+            .filter(|(_, &h)| !h)
+            .map(|(v, _)| v * v)
+            .sum();
+        damping_work += damping * m * damped * dt_mean;
         internal += 0.5 * (previous.forces[a] + f_int).dot(&previous.increments[a]);
         external += 0.5 * (previous.reactions[a] + reaction).dot(&previous.increments[a]);
         tool += 0.5 * (previous.contact[a] + f_contact).dot(&previous.increments[a]);
@@ -477,6 +481,16 @@ fn unstable(state: &State, element: usize, reason: String) -> SolverError {
         kinetic: state.energies.kinetic,
         internal: state.energies.internal_work,
         external: state.energies.external_work,
+    }
+}
+
+/// Which velocity components of a node the solver does not integrate: none of a free node's,
+/// all of a fixed or driven node's, the marked ones of a partly held node.
+fn held_components(motion: Option<&Motion>) -> Vector3<bool> {
+    match motion {
+        None => Vector3::repeat(false),
+        Some(Motion::Fixed | Motion::Velocity(_)) => Vector3::repeat(true),
+        Some(Motion::Components(held)) => Vector3::from(*held),
     }
 }
 

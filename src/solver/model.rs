@@ -19,6 +19,9 @@ pub enum Motion {
     Fixed,
     /// Moved with a prescribed velocity (all three components).
     Velocity(VelocityField),
+    /// Held along the global axes marked `true` (x, y, z), free along the others: a symmetry
+    /// plane or a guide.
+    Components([bool; 3]),
 }
 
 impl std::fmt::Debug for Motion {
@@ -26,6 +29,7 @@ impl std::fmt::Debug for Motion {
         match self {
             Motion::Fixed => write!(f, "Fixed"),
             Motion::Velocity(_) => write!(f, "Velocity(..)"),
+            Motion::Components(held) => write!(f, "Components({held:?})"),
         }
     }
 }
@@ -84,7 +88,9 @@ pub enum ModelError {
 }
 
 impl Model {
-    /// Builds the elements of `mesh` with the warp along `warp_direction` projected on each.
+    /// Builds the elements of `mesh` with the warp along `warp_direction` projected on each, or
+    /// along the mesh's own per-triangle directions where it has them (a mesh file's
+    /// orientations, `Mesh::warp_directions`).
     pub fn new(
         mesh: Mesh,
         laminate: Laminate,
@@ -102,7 +108,11 @@ impl Model {
             .iter()
             .enumerate()
             .map(|(element, &nodes)| {
-                MembraneTriangle::new(nodes, nodes.map(|n| mesh.nodes[n]), &warp_direction)
+                let warp = mesh
+                    .warp_directions
+                    .as_ref()
+                    .map_or(warp_direction, |d| d[element]);
+                MembraneTriangle::new(nodes, nodes.map(|n| mesh.nodes[n]), &warp)
                     .map_err(|error| ModelError::Element { element, error })
             })
             .collect::<Result<Vec<_>, _>>()?;
