@@ -5,6 +5,7 @@
 //! - [`matrix`]: `C10(T)`, `eta1(T)` and `D1(T)` of the matrix law;
 //! - [`strip_data`], [`fabric_tension`]: strip tension curves and the yarn tension `A_k`;
 //! - [`shear`]: shear coefficients `c_k` from bias-extension or picture-frame curves;
+//! - [`shear_fe`]: those coefficients refined by the FE bias-extension test in the loop;
 //! - [`shear_matrix`]: the matrix layers' share of a shear test's force, subtracted first;
 //! - [`card_section`]: the fitted `[matrix]` section and `[fabric] shear` key of a card;
 //! - [`card_key`]: one key of a card section replaced in the card's text;
@@ -16,6 +17,7 @@ pub mod fabric_tension;
 pub mod least_squares;
 pub mod matrix;
 pub mod shear;
+pub mod shear_fe;
 pub mod shear_matrix;
 pub mod strip_data;
 pub mod synthetic;

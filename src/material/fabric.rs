@@ -100,6 +100,11 @@ impl ShearInteraction {
         Self { coefficients }
     }
 
+    /// `c_1, c_2, ...` (MPa).
+    pub fn coefficients(&self) -> &[f64] {
+        &self.coefficients
+    }
+
     pub fn energy(&self, i10: f64) -> f64 {
         self.coefficients
             .iter()
