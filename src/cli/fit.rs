@@ -7,6 +7,7 @@ use crate::fit::matrix::{fit_matrix, uniaxial_stress, BulkRule, Eta1, Temperatur
 use crate::fit::shear::{
     fit_shear, read_force_curve, shear_points, ForceCurve, ShearFit, ShearPoint, ShearTest,
 };
+use crate::fit::shear_fe::{refine_shear_fe, FeRun, RefineSettings, ShearFeFit, Stop};
 use crate::fit::shear_matrix::{matrix_layers, subtract_matrix, TestConditions};
 use crate::fit::tension_data::{read_manifest, TensionCurve};
 use crate::io::plot::{write_png, LinePlot, LineStyle, Series};
@@ -39,7 +40,10 @@ pub enum ShearTestKind {
     Picture frame: --frame-side L (pin to pin) [--fabric-side, default L].\n\
     Model: F_sh(gamma) = 2 t_B sin(gamma) W_s'(sin^2 gamma), W_s = sum_k c_k I10^k.\n\
     A card with matrix layers (a prepreg) needs --temperature and --speed of the test: the\n\
-    layers' force, driven through the test's pin-jointed kinematics, is subtracted first."
+    layers' force, driven through the test's pin-jointed kinematics, is subtracted first.\n\
+    --refine-fe (bias extension): starting from that fit, runs the FE bias-extension test\n\
+    with the card (W/6 crossed cells) in a Gauss-Newton loop on the measured force curve;\n\
+    each iteration is one FE run (seconds to minutes)."
 )]
 pub struct ShearArgs {
     /// Force–displacement curve (CSV).
@@ -77,9 +81,21 @@ pub struct ShearArgs {
     /// Largest shear angle fitted (degrees).
     #[arg(long, default_value_t = 50.0)]
     max_shear: f64,
-    /// PNG of the normalised shear force vs shear angle: data (dots) and model (line).
+    /// PNG of the normalised shear force vs shear angle: data (dots) and model (line); with
+    /// --refine-fe, of the crosshead force: data (dots) and the final FE run (line).
     #[arg(long)]
     plot: Option<PathBuf>,
+    /// Refine the coefficients by running the FE bias-extension test inside the fit loop, on
+    /// the measured force curve (bias extension only).
+    #[arg(long)]
+    refine_fe: bool,
+    /// --refine-fe: cell size of the FE specimen (mm); default W/6.
+    #[arg(long, requires = "refine_fe")]
+    fe_element_size: Option<f64>,
+    /// --refine-fe: Gauss-Newton iterations at most (one FE run each, more when a step is
+    /// halved).
+    #[arg(long, default_value_t = 6, requires = "refine_fe")]
+    fe_iterations: usize,
 }
 
 #[derive(clap::Args, Debug)]
@@ -125,6 +141,12 @@ pub fn run(command: &FitCommand) -> anyhow::Result<()> {
 
 fn run_shear(args: &ShearArgs) -> anyhow::Result<()> {
     let test = shear_test(args)?;
+    if args.refine_fe && args.test == ShearTestKind::PictureFrame {
+        anyhow::bail!(
+            "--refine-fe runs the FE bias-extension test: it needs a bias-extension curve; a \
+             picture frame shears homogeneously, so its analytic fit is already what the FE gives"
+        );
+    }
     if !(args.max_shear.is_finite() && args.max_shear > 0.0 && args.max_shear < 90.0) {
         anyhow::bail!(
             "--max-shear {}: must lie between 0 and 90 degrees",
@@ -143,29 +165,159 @@ fn run_shear(args: &ShearArgs) -> anyhow::Result<()> {
         args.terms,
         args.max_shear.to_radians(),
     )?;
+    print_shear_table(&fit, matrix.as_ref());
+    let refined = if args.refine_fe {
+        Some(refine(args, &card, &measured, &fit)?)
+    } else {
+        None
+    };
+    let (coefficients, mut provenance) = match &refined {
+        Some(r) => (r.coefficients.clone(), refined_provenance(args, r)),
+        None => (fit.result.parameters.clone(), Vec::new()),
+    };
+    provenance.splice(0..0, shear_provenance(args, &fit, matrix.as_ref()));
     let origin = args.output.display().to_string();
-    let provenance = shear_provenance(args, &fit, matrix.as_ref());
     let written = replace_key(
         &text,
         "fabric",
         "shear",
-        &toml_array(&fit.result.parameters),
+        &toml_array(&coefficients),
         &provenance,
     )
     .map_err(|e| anyhow::anyhow!("{}: {e}", args.card.display()))?;
     // The card must still load; anything else is a bug here, caught before writing.
     MaterialCard::from_toml(&written, &origin)?;
     std::fs::write(&args.output, &written).with_context(|| format!("cannot write {origin}"))?;
-    print_shear_table(&fit, matrix.as_ref());
     if let Some(png) = &args.plot {
-        let matrix_points = match &matrix {
-            Some(m) => matrix_points(&measured, m, &test, args.max_shear.to_radians())?,
-            None => Vec::new(),
+        let plot = match &refined {
+            Some(r) => refined_plot(r),
+            None => {
+                let matrix_points = match &matrix {
+                    Some(m) => matrix_points(&measured, m, &test, args.max_shear.to_radians())?,
+                    None => Vec::new(),
+                };
+                shear_plot(&fit, &matrix_points, thickness, args.max_shear)
+            }
         };
-        let plot = shear_plot(&fit, &matrix_points, thickness, args.max_shear);
         write_png(png, &plot, 900, 600)?;
     }
     Ok(())
+}
+
+/// `--refine-fe`: the FE bias-extension test in the loop, from the analytic fit, on the
+/// measured (not matrix-subtracted: the FE has the matrix layers) curve.
+fn refine(
+    args: &ShearArgs,
+    card: &MaterialCard,
+    measured: &ForceCurve,
+    fit: &ShearFit,
+) -> anyhow::Result<ShearFeFit> {
+    let (Some(width), Some(length)) = (args.width, args.length) else {
+        anyhow::bail!("--refine-fe needs the bias-extension specimen's --width and --length");
+    };
+    let mut settings = RefineSettings::new(width, length, args.max_shear.to_radians());
+    if let Some(size) = args.fe_element_size {
+        settings.fe.element_size = size;
+    }
+    settings.max_iterations = args.fe_iterations;
+    settings.fe.test_speed = args.speed;
+    if let Some(t) = args.temperature {
+        settings.fe.temperature = t;
+    }
+    println!(
+        "refining by the FE bias-extension test ({:.1} mm crossed cells, {} iterations at most):",
+        settings.fe.element_size, settings.max_iterations
+    );
+    println!(
+        "{:>4}  {:>6}  {:>8}  {:>34}  {:>10}  {:>8}  {:>9}  {:>6}  {:>7}",
+        "it", "step", "", "c_k (MPa)", "RMS (N)", "% range", "per point", "KE/IE", "wall"
+    );
+    let mut report = |r: &FeRun| {
+        let c: Vec<String> = r.coefficients.iter().map(|c| format!("{c:.4e}")).collect();
+        println!(
+            "{:>4}  {:>6.3}  {:>8}  {:>34}  {:>10.4}  {:>8.2}  {:>8.1}%  {:>6.3}  {:>6.1}s",
+            r.iteration,
+            r.step_fraction,
+            if r.accepted { "accepted" } else { "rejected" },
+            c.join(", "),
+            r.rms_force,
+            100.0 * r.rms_of_range,
+            100.0 * r.per_point_rms,
+            r.kinetic_ratio,
+            r.wall_seconds
+        );
+    };
+    let refined = refine_shear_fe(
+        measured,
+        card,
+        &fit.result.parameters,
+        &settings,
+        &mut report,
+    )?;
+    if refined.stop == Stop::NoDescent {
+        eprintln!(
+            "warning: no step along the analytic model's direction lowered the FE misfit; the \
+             best coefficients found are kept"
+        );
+    }
+    println!("{:>4}  {:>24}", "k", "refined c_k (MPa)");
+    for (k, (c, e)) in refined
+        .coefficients
+        .iter()
+        .zip(&refined.standard_errors)
+        .enumerate()
+    {
+        println!("{:>4}  {:>24}", k + 1, format!("{c:.4e} ± {e:.2e}"));
+    }
+    Ok(refined)
+}
+
+/// Comment lines about the FE refinement, after the analytic fit's.
+fn refined_provenance(args: &ShearArgs, refined: &ShearFeFit) -> Vec<String> {
+    let errors: Vec<String> = refined
+        .standard_errors
+        .iter()
+        .map(|e| format!("{e:.2e}"))
+        .collect();
+    let misfit = refined.best().map_or(String::new(), |b| {
+        format!(
+            ": FE misfit RMS {:.3e} N ({:.2} % of the force range, {:.1} % per point)",
+            b.rms_force,
+            100.0 * b.rms_of_range,
+            100.0 * b.per_point_rms
+        )
+    });
+    vec![format!(
+        "Then refined by the FE bias-extension test in the loop (--refine-fe{}, {} FE runs){misfit}; \
+         standard errors [{}] MPa.",
+        args.fe_element_size
+            .map_or(String::new(), |h| format!(" --fe-element-size {h}")),
+        refined.runs.len(),
+        errors.join(", ")
+    )]
+}
+
+/// Crosshead force against displacement: the data and the final FE run.
+fn refined_plot(refined: &ShearFeFit) -> LinePlot {
+    let data = refined
+        .points
+        .iter()
+        .map(|p| (p.displacement, p.data))
+        .collect();
+    let fe = refined
+        .points
+        .iter()
+        .map(|p| (p.displacement, p.fe))
+        .collect();
+    LinePlot {
+        title: "fit shear --refine-fe: data (dots), FE bias-extension test (line)".into(),
+        x_label: "crosshead displacement (mm)".into(),
+        y_label: "force (N)".into(),
+        series: vec![
+            Series::new("data", data, LineStyle::Markers).with_colour(0),
+            Series::new("FE, refined card", fe, LineStyle::Solid).with_colour(1),
+        ],
+    }
 }
 
 /// The fabric's part of a prepreg's curve and the matrix layers' part (MODEL.md §5).
