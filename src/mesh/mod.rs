@@ -2,6 +2,7 @@
 //! sets, and where a mesh file gives them, reference warp directions per triangle.
 
 pub mod file;
+pub mod gmsh;
 pub mod orientation;
 pub mod rectangle;
 
