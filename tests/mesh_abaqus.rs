@@ -334,24 +334,36 @@ fn nested_includes_relative_to_the_including_file() {
 4
 ",
         ),
-        ("m/n.inp", "1, 0, 0, 0
+        (
+            "m/n.inp",
+            "1, 0, 0, 0
 2, 1, 0, 0
 3, 1, 1, 0
 4, 0, 1, 0
-"),
-        ("m/sub/e.inp", "1, 1, 2, 3
+",
+        ),
+        (
+            "m/sub/e.inp",
+            "1, 1, 2, 3
 2, 1, 3, 4
-"),
+",
+        ),
     ])
     .unwrap();
     assert_eq!(read.import.mesh.triangles, vec![[0, 1, 2], [0, 2, 3]]);
     assert_eq!(read.import.mesh.node_sets["A"], vec![3]);
     let e = parse(&[
-        ("m/main.inp", "*NODE, INPUT=n.inp
-"),
-        ("m/n.inp", "1, 0, 0, 0
+        (
+            "m/main.inp",
+            "*NODE, INPUT=n.inp
+",
+        ),
+        (
+            "m/n.inp",
+            "1, 0, 0, 0
 *ELEMENT, TYPE=S3
-"),
+",
+        ),
     ])
     .unwrap_err();
     assert_eq!((e.file.as_str(), e.line), ("m/n.inp", Some(2)), "{e}");
@@ -779,16 +791,29 @@ fn labels_are_renumbered_in_file_order() {
     assert_eq!(read.import.mesh.node_sets, BTreeMap::new());
 }
 
+/// A deck with most of what the reader reads: the writer's output (distributions, an
+/// orientation, a section), sparse labels, quadrilaterals, sets, GENERATE, an include, a
+/// rotated orientation and a section.
 fn valid_deck() -> String {
-    let mesh = awkward_rectangle(DiagonalPattern::Alternating);
+    let mesh = rectangle(20.0, 10.0, 2, 2, DiagonalPattern::Alternating);
     let output = ElementOutput {
         warp: warp(&mesh),
         thickness: vec![0.3; mesh.triangles.len()],
     };
     format!(
-        "{}{QUADS}*INCLUDE, INPUT=self.inp\n{ORIENTED}",
+        "{}{QUADS}*INCLUDE, INPUT=self.inp\n*ORIENTATION, NAME=P\n1, 0, 0, 0, 1, 0\n3, 30\n\
+         *SHELL SECTION, ELSET=Plate, MATERIAL=M, ORIENTATION=P\n0.3, 5\n",
         written(&mesh, Some(&output))
     )
+}
+
+const SELF: &str = "*NODE\n1000, 0, 0, 0\n";
+
+#[test]
+fn the_deck_that_the_property_test_mutates_is_valid() {
+    let read = parse(&[("d.inp", &valid_deck()), ("self.inp", SELF)]).unwrap();
+    assert_eq!(read.import.mesh.triangles.len(), 8 + 4);
+    assert!(read.thickness.iter().all(|t| *t == Some(0.3)));
 }
 
 const TOKENS: [&str; 16] = [
@@ -848,6 +873,6 @@ proptest! {
             }
             text.replace_range(start..end, insert);
         }
-        let _ = parse(&[("d.inp", &text), ("self.inp", "*NODE\n1000, 0, 0, 0\n")]);
+        let _ = parse(&[("d.inp", &text), ("self.inp", SELF)]);
     }
 }

@@ -129,7 +129,7 @@ fn lex_file(
                 ));
             }
             // a keyword line ending with a comma goes on on the next line, which then starts
-            // with a parameter name (a data line would start with a number)
+            // with a parameter `NAME=` (a data line starts with a number, or names a set)
             let mut keyword_text = rest.to_string();
             while keyword_text.trim_end().ends_with(',') {
                 match lines.peek() {
@@ -137,7 +137,8 @@ fn lex_file(
                         lines.next();
                     }
                     Some((_, more))
-                        if more.trim().starts_with(|c: char| c.is_ascii_alphabetic()) =>
+                        if more.trim().starts_with(|c: char| c.is_ascii_alphabetic())
+                            && more.contains('=') =>
                     {
                         keyword_text.push_str(more.trim());
                         lines.next();
@@ -366,6 +367,21 @@ mod tests {
         assert_eq!(d.fields, ["0.31", "5"]);
         assert!(d.continued);
         assert_eq!(d.loc.line, 5);
+    }
+
+    #[test]
+    fn a_keyword_line_goes_on_only_onto_a_line_of_parameters() {
+        let deck = lex_files(&[(
+            "d.inp",
+            "*NSET, NSET=A,\nB, C\n*ELSET, ELSET=E,\nGENERATE\n",
+        )])
+        .unwrap();
+        let kinds: Vec<bool> = deck
+            .records
+            .iter()
+            .map(|r| matches!(r, Record::Keyword(_)))
+            .collect();
+        assert_eq!(kinds, [true, false, true, false]);
     }
 
     #[test]
