@@ -168,9 +168,9 @@ pub fn write_inp_to<W: Write>(
         text.push_str(", 1.0, 0.0, 0.0, 0.0, 1.0, 0.0\n");
         for (t, a) in warp.iter().enumerate() {
             let [p, q, r] = mesh.triangles[t].map(|n| mesh.nodes[n]);
-            let normal = (q - p).cross(&(r - p));
+            let normal = (q - p).cross(&(r - p)).normalize();
             let b = normal.cross(a);
-            if !(a.iter().all(|c| c.is_finite()) && b.norm() > 1e-10 * normal.norm() * a.norm()) {
+            if !(a.iter().all(|c| c.is_finite()) && b.norm() > 1e-10 * a.norm()) {
                 return Err(error(format!(
                     "triangle {t}: warp direction {a:?} is zero, not finite or normal to the \
                      triangle"
