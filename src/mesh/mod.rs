@@ -1,6 +1,7 @@
 //! Meshes of the blank: reference node positions, 3-node triangles, named node and element
 //! sets, and where a mesh file gives them, reference warp directions per triangle.
 
+pub mod abaqus;
 pub mod file;
 pub mod gmsh;
 pub mod orientation;

@@ -1,0 +1,459 @@
+//! The deck read, what it means: labels resolved to indices, sets in the order of their
+//! definitions, each element's section with its orientation and thickness, quadrilaterals
+//! split, nodes of no element dropped, and the mesh validated.
+
+use super::super::lexer::{Deck, Loc};
+use super::super::AbaqusMesh;
+use super::lookup::{IndexSet, Resolved, Use};
+use super::{supported_types, Axes, Model, Thickness, ELEMENT_TYPES};
+use crate::mesh::file::split_quadrilateral;
+use crate::mesh::{Mesh, MeshError, MeshFileError, MeshImport};
+use nalgebra::Vector3;
+use std::collections::{BTreeMap, HashMap, HashSet};
+use std::ops::Range;
+
+type Result<T> = std::result::Result<T, MeshFileError>;
+
+/// The elements as triangles.
+struct Triangulation {
+    triangles: Vec<[usize; 3]>,
+    /// The element of each triangle.
+    element: Vec<usize>,
+    /// The triangles of element `e`: `first[e]..first[e + 1]`.
+    first: Vec<usize>,
+    /// Quadrilaterals split, by type.
+    quads: BTreeMap<&'static str, usize>,
+}
+
+impl Triangulation {
+    fn of(&self, e: usize) -> Range<usize> {
+        self.first[e]..self.first[e + 1]
+    }
+}
+
+/// Per element: the warp reference (local 1-axis) and thickness of its section.
+struct Properties {
+    warp: Vec<Option<Vector3<f64>>>,
+    thickness: Vec<Option<f64>>,
+}
+
+/// "3 nodes ..." / "1 node ...".
+fn count(n: usize, one: &str, many: &str) -> String {
+    format!("{n} {}", if n == 1 { one } else { many })
+}
+
+/// Up to ten labels, and "..." for more.
+fn some_labels(labels: impl Iterator<Item = u64>, total: usize) -> String {
+    let shown: Vec<String> = labels.take(10).map(|l| l.to_string()).collect();
+    let more = if total > shown.len() { ", ..." } else { "" };
+    format!("{}{more}", shown.join(", "))
+}
+
+impl Model {
+    /// Resolves labels, sets, sections, orientations and thicknesses and builds the mesh.
+    pub(super) fn finish(mut self, deck: &Deck) -> Result<AbaqusMesh> {
+        let connectivity = self.connectivity(deck)?;
+        let (node_sets, element_sets) = self.resolve_sets(deck, &connectivity)?;
+        let properties = self.properties(deck, &element_sets)?;
+        let split = self.triangulate(&connectivity);
+
+        // nodes used by no element are dropped
+        let mut used = vec![false; self.nodes.len()];
+        for &n in split.triangles.iter().flatten() {
+            used[n] = true;
+        }
+        let mut new_index = vec![usize::MAX; self.nodes.len()];
+        let mut kept = Vec::with_capacity(self.nodes.len());
+        for (n, _) in self.nodes.iter().enumerate().filter(|(n, _)| used[*n]) {
+            new_index[n] = kept.len();
+            kept.push(n);
+        }
+        let orphans = self.nodes.len() - kept.len();
+        if orphans > 0 {
+            let in_sets: HashSet<usize> = node_sets
+                .values()
+                .flat_map(|s| s.order.iter().copied())
+                .filter(|&n| !used[n])
+                .collect();
+            let labels = (0..self.nodes.len())
+                .filter(|&n| !used[n])
+                .map(|n| self.nodes[n].label);
+            self.notes.push(format!(
+                "{} used by no element dropped ({} of them in node sets only; labels {})",
+                count(orphans, "node", "nodes"),
+                in_sets.len(),
+                some_labels(labels, orphans)
+            ));
+        }
+
+        let mut mesh_node_sets = BTreeMap::new();
+        let mut mesh_element_sets = BTreeMap::new();
+        let mut internal = Vec::new();
+        for set in node_sets.into_values() {
+            if set.internal {
+                internal.push(set.name);
+                continue;
+            }
+            let members: Vec<usize> = set
+                .order
+                .iter()
+                .filter(|&&n| used[n])
+                .map(|&n| new_index[n])
+                .collect();
+            if members.len() < set.order.len() {
+                self.notes.push(format!(
+                    "node set '{}': {} of its {} nodes belong to no element and were dropped",
+                    set.name,
+                    set.order.len() - members.len(),
+                    set.order.len()
+                ));
+            }
+            mesh_node_sets.insert(set.name, members);
+        }
+        for set in element_sets.into_values() {
+            if set.internal {
+                internal.push(set.name);
+                continue;
+            }
+            let members: Vec<usize> = set.order.iter().flat_map(|&e| split.of(e)).collect();
+            mesh_element_sets.insert(set.name, members);
+        }
+        if !internal.is_empty() {
+            internal.sort();
+            self.notes.push(format!(
+                "internal sets (INTERNAL: Abaqus/CAE's own) used but not kept: {}",
+                internal.join(", ")
+            ));
+        }
+
+        let rigid: Vec<bool> = split.element.iter().map(|&e| self.rigid(e)).collect();
+        let warp_directions = self.warp_directions(&properties, &split);
+        let thickness = split
+            .element
+            .iter()
+            .map(|&e| properties.thickness[e])
+            .collect();
+        let notes = self.notes(deck, &split);
+        let mesh = Mesh {
+            nodes: kept.iter().map(|&n| self.nodes[n].position).collect(),
+            triangles: split
+                .triangles
+                .iter()
+                .map(|t| t.map(|n| new_index[n]))
+                .collect(),
+            node_sets: mesh_node_sets,
+            element_sets: mesh_element_sets,
+            warp_directions,
+        };
+        if let Err(e) = mesh.validate() {
+            return Err(self.validation_error(deck, e, &split, &kept));
+        }
+        Ok(AbaqusMesh {
+            import: MeshImport { mesh, rigid, notes },
+            thickness,
+        })
+    }
+
+    fn rigid(&self, e: usize) -> bool {
+        ELEMENT_TYPES[self.elements[e].kind].2
+    }
+
+    /// Each element's nodes as node indices.
+    fn connectivity(&self, deck: &Deck) -> Result<Vec<Vec<usize>>> {
+        self.elements
+            .iter()
+            .map(|e| {
+                e.nodes
+                    .iter()
+                    .map(|label| {
+                        self.node_index.get(label).copied().ok_or_else(|| {
+                            deck.error(
+                                e.loc,
+                                format!(
+                                    "element {} refers to node {label}, which is not defined",
+                                    e.label
+                                ),
+                            )
+                        })
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// Triangles of the elements, quadrilaterals split along their shorter diagonals.
+    fn triangulate(&self, connectivity: &[Vec<usize>]) -> Triangulation {
+        let positions: Vec<Vector3<f64>> = self.nodes.iter().map(|n| n.position).collect();
+        let mut split = Triangulation {
+            triangles: Vec::with_capacity(2 * connectivity.len()),
+            element: Vec::with_capacity(2 * connectivity.len()),
+            first: Vec::with_capacity(connectivity.len() + 1),
+            quads: BTreeMap::new(),
+        };
+        for (e, nodes) in connectivity.iter().enumerate() {
+            split.first.push(split.triangles.len());
+            let triangles = match *nodes.as_slice() {
+                [a, b, c] => vec![[a, b, c]],
+                [a, b, c, d] => {
+                    *split
+                        .quads
+                        .entry(ELEMENT_TYPES[self.elements[e].kind].0)
+                        .or_default() += 1;
+                    split_quadrilateral(&positions, [a, b, c, d]).to_vec()
+                }
+                _ => Vec::new(),
+            };
+            for t in triangles {
+                split.triangles.push(t);
+                split.element.push(e);
+            }
+        }
+        split.first.push(split.triangles.len());
+        split
+    }
+
+    /// Each element's section, then its orientation's local 1-axis (after the additional
+    /// rotation) and its thickness.
+    fn properties(
+        &self,
+        deck: &Deck,
+        element_sets: &HashMap<String, IndexSet>,
+    ) -> Result<Properties> {
+        let mut section_of: Vec<Option<usize>> = vec![None; self.elements.len()];
+        for (s, section) in self.sections.iter().enumerate() {
+            let set = element_sets.get(&section.elset).ok_or_else(|| {
+                deck.error(
+                    section.loc,
+                    format!(
+                        "the section's element set '{}' is not defined",
+                        section.elset
+                    ),
+                )
+            })?;
+            for &e in &set.order {
+                if let Some(first) = section_of[e] {
+                    return Err(deck.error(
+                        section.loc,
+                        format!(
+                            "element {} already has a section (at {})",
+                            self.elements[e].label,
+                            deck.place(self.sections[first].loc, section.loc)
+                        ),
+                    ));
+                }
+                section_of[e] = Some(s);
+            }
+        }
+        let mut cache: HashMap<String, Resolved> = HashMap::new();
+        let mut properties = Properties {
+            warp: vec![None; self.elements.len()],
+            thickness: vec![None; self.elements.len()],
+        };
+        for (e, s) in section_of.iter().enumerate() {
+            let Some(section) = s.map(|s| &self.sections[s]) else {
+                continue;
+            };
+            if let Some(name) = &section.orientation {
+                let o = self.orientations.get(name).ok_or_else(|| {
+                    deck.error(section.loc, format!("orientation '{name}' is not defined"))
+                })?;
+                let (e1, e2) = match &o.axes {
+                    Axes::Fixed(e1, e2) => (*e1, *e2),
+                    Axes::Distribution(d) => {
+                        let v = self.distribution_value(
+                            deck,
+                            &mut cache,
+                            element_sets,
+                            (d, Use::Orientation, o.loc),
+                            e,
+                        )?;
+                        let a = Vector3::new(v[0], v[1], v[2]);
+                        let b = Vector3::new(v[3], v[4], v[5]);
+                        frame(a, b).ok_or_else(|| {
+                            deck.error(
+                                o.loc,
+                                format!(
+                                    "distribution '{d}': the points a and b of element {} are \
+                                     collinear with the origin",
+                                    self.elements[e].label
+                                ),
+                            )
+                        })?
+                    }
+                };
+                properties.warp[e] = Some(e1 * o.rotation.cos() + e2 * o.rotation.sin());
+            }
+            properties.thickness[e] = match &section.thickness {
+                Thickness::Unknown => None,
+                Thickness::Value(t) => Some(*t),
+                Thickness::Distribution(d) => {
+                    let t = self.distribution_value(
+                        deck,
+                        &mut cache,
+                        element_sets,
+                        (d, Use::Thickness, section.loc),
+                        e,
+                    )?[0];
+                    if t <= 0.0 {
+                        return Err(deck.error(
+                            section.loc,
+                            format!(
+                                "distribution '{d}': thickness {t} of element {} is not positive",
+                                self.elements[e].label
+                            ),
+                        ));
+                    }
+                    Some(t)
+                }
+            };
+        }
+        Ok(properties)
+    }
+
+    /// Per triangle, its element's local 1-axis: `None` where no element has an orientation,
+    /// the global x axis (with a note) for the elements without one where others have one.
+    fn warp_directions(
+        &mut self,
+        properties: &Properties,
+        split: &Triangulation,
+    ) -> Option<Vec<Vector3<f64>>> {
+        let warp = &properties.warp;
+        if warp.iter().all(Option::is_none) {
+            return None;
+        }
+        let bare: Vec<usize> = (0..warp.len())
+            .filter(|&e| warp[e].is_none() && !self.rigid(e))
+            .collect();
+        if !bare.is_empty() {
+            let deformable = (0..warp.len()).filter(|&e| !self.rigid(e)).count();
+            self.notes.push(format!(
+                "{} of {deformable} shell and membrane elements have no orientation (elements \
+                 {}): their warp reference is the global x axis, projected onto each element as \
+                 Abaqus does for shells without one",
+                bare.len(),
+                some_labels(bare.iter().map(|&e| self.elements[e].label), bare.len())
+            ));
+        }
+        Some(
+            split
+                .element
+                .iter()
+                .map(|&e| warp[e].unwrap_or_else(Vector3::x))
+                .collect(),
+        )
+    }
+
+    /// The notes: what was split, flagged, read as structure, ignored.
+    fn notes(&mut self, deck: &Deck, split: &Triangulation) -> Vec<String> {
+        let mut notes = Vec::new();
+        if !split.quads.is_empty() {
+            let quads: usize = split.quads.values().sum();
+            notes.push(format!(
+                "{} ({}) split into {} triangles along their shorter diagonals",
+                count(quads, "quadrilateral", "quadrilaterals"),
+                split
+                    .quads
+                    .iter()
+                    .map(|(k, n)| format!("{k}: {n}"))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                2 * quads
+            ));
+        }
+        let rigid = (0..self.elements.len()).filter(|&e| self.rigid(e)).count();
+        if rigid > 0 {
+            notes.push(format!(
+                "{} (R3D3/R3D4): their triangles are flagged rigid",
+                count(rigid, "rigid element", "rigid elements")
+            ));
+        }
+        if let Some((part, _)) = &self.structure.part {
+            notes.push(match &self.structure.instance {
+                Some((instance, _)) => format!("part '{part}' read (instance '{instance}')"),
+                None => format!("part '{part}' read (it has no *INSTANCE)"),
+            });
+        }
+        if self.normals_ignored {
+            notes.push("node normals given on *NODE lines ignored".to_string());
+        }
+        notes.append(&mut self.notes);
+        if !self.ignored.is_empty() {
+            notes.push(ignored_note(deck, &self.ignored));
+        }
+        notes
+    }
+
+    /// What [`Mesh::validate`] found, at the element or node concerned.
+    fn validation_error(
+        &self,
+        deck: &Deck,
+        error: MeshError,
+        split: &Triangulation,
+        kept: &[usize],
+    ) -> MeshFileError {
+        let file = deck.files.first().cloned().unwrap_or_default();
+        let element = |t: usize| &self.elements[split.element[t]];
+        match error {
+            MeshError::Empty => MeshFileError::in_file(
+                file,
+                format!("no elements (supported types: {})", supported_types()),
+            ),
+            MeshError::Degenerate { triangle, area } => deck.error(
+                element(triangle).loc,
+                format!(
+                    "element {} is degenerate (a triangle of area {area:e} mm^2)",
+                    element(triangle).label
+                ),
+            ),
+            MeshError::NonFinite { node } => match kept.get(node).map(|&n| &self.nodes[n]) {
+                Some(n) => deck.error(
+                    n.loc,
+                    format!("node {} has a non-finite coordinate", n.label),
+                ),
+                None => MeshFileError::in_file(file, error.to_string()),
+            },
+            MeshError::BadWarpDirection { triangle } => deck.error(
+                element(triangle).loc,
+                format!(
+                    "element {}: zero or non-finite warp direction",
+                    element(triangle).label
+                ),
+            ),
+            other => MeshFileError::in_file(file, other.to_string()),
+        }
+    }
+}
+
+/// The unit local 1- and 2-axes of a rectangular system with the local 1-axis along `a` and
+/// `b` in the 1-2 plane; `None` when `a` and `b` are (nearly) collinear.
+pub(super) fn frame(a: Vector3<f64>, b: Vector3<f64>) -> Option<(Vector3<f64>, Vector3<f64>)> {
+    let (na, nb) = (a.norm(), b.norm());
+    let normal = a.cross(&b);
+    if !(na > 0.0 && nb > 0.0 && normal.norm() > 1e-10 * na * nb && normal.norm().is_finite()) {
+        return None;
+    }
+    let e1 = a / na;
+    let e3 = normal.normalize();
+    Some((e1, e3.cross(&e1)))
+}
+
+/// "ignored keywords: *HEADING (line 1), *MATERIAL (line 40, line 52), *ELASTIC (b.inp line 3)".
+fn ignored_note(deck: &Deck, ignored: &[(String, Loc)]) -> String {
+    let mut order: Vec<&str> = Vec::new();
+    let mut places: HashMap<&str, Vec<String>> = HashMap::new();
+    let main = Loc { file: 0, line: 0 };
+    for (name, loc) in ignored {
+        if !places.contains_key(name.as_str()) {
+            order.push(name);
+        }
+        places.entry(name).or_default().push(deck.place(*loc, main));
+    }
+    let items: Vec<String> = order
+        .iter()
+        .map(|name| format!("*{name} ({})", places[name].join(", ")))
+        .collect();
+    format!(
+        "ignored keywords (not part of the mesh): {}",
+        items.join(", ")
+    )
+}
