@@ -27,6 +27,9 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
 fn forming(args: &Args) -> anyhow::Result<()> {
     let (scenario, dir) = args.scenario.load()?;
     let forming = FormingModel::new(&scenario).map_err(|e| anyhow::anyhow!(e))?;
+    for note in &forming.notes {
+        eprintln!("note: {note}");
+    }
     std::fs::create_dir_all(&dir)
         .with_context(|| format!("cannot create the output folder {}", dir.display()))?;
     let frames = match scenario.output.frames {
@@ -164,6 +167,15 @@ fn write_shear_map(
     Ok(path)
 }
 
+/// A flange measure, or why there is none (tools from files without `tools.flange_radius`).
+fn flange_measure(forming: &FormingModel, value: impl Fn() -> String) -> String {
+    if forming.measures_flange() {
+        value()
+    } else {
+        "not measured: give tools.flange_radius (where the die's flat face begins)".into()
+    }
+}
+
 fn print_summary(
     scenario: &Scenario,
     forming: &FormingModel,
@@ -212,19 +224,23 @@ fn print_summary(
         ),
         (
             "flange off the die",
-            format!(
-                "{:.2} mm at most, {:.0} mm^2 lifted by more than half the ply",
-                last.map_or(0.0, |r| r.wrinkles.height),
-                last.map_or(0.0, |r| r.wrinkles.area)
-            ),
+            flange_measure(forming, || {
+                format!(
+                    "{:.2} mm at most, {:.0} mm^2 lifted by more than half the ply",
+                    last.map_or(0.0, |r| r.wrinkles.height),
+                    last.map_or(0.0, |r| r.wrinkles.area)
+                )
+            }),
         ),
         (
             "flange waviness",
-            format!(
-                "{:.2} mm amplitude around the part, over {:.0} mm^2",
-                last.map_or(0.0, |r| r.wrinkles.waviness),
-                last.map_or(0.0, |r| r.wrinkles.wavy_area)
-            ),
+            flange_measure(forming, || {
+                format!(
+                    "{:.2} mm amplitude around the part, over {:.0} mm^2",
+                    last.map_or(0.0, |r| r.wrinkles.waviness),
+                    last.map_or(0.0, |r| r.wrinkles.wavy_area)
+                )
+            }),
         ),
         (
             "draw-in of the edge",

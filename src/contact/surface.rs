@@ -1,6 +1,7 @@
 //! Rigid tool surfaces: triangulated, with outward normals facing the blank.
 
 use nalgebra::Vector3;
+use std::collections::HashMap;
 
 /// A triangulated rigid surface in its own frame (mm). Triangles are counter-clockwise seen
 /// from the side the blank is on, so `(b - a) x (c - a)` points towards the blank.
@@ -55,6 +56,69 @@ impl TriangleSurface {
             hi = hi.sup(v);
         }
         (lo, hi)
+    }
+}
+
+/// How a surface read from a file faces the blank.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Facing {
+    /// Its triangles' normals point towards the blank, as the contact needs.
+    Towards,
+    /// They all point away: the surface is to be used flipped.
+    Away,
+}
+
+impl TriangleSurface {
+    /// Whether neighbouring triangles agree on the orientation: every edge two triangles share
+    /// is run through in opposite directions by them. Returns the first triangle that disagrees
+    /// with a neighbour (or shares an edge with more than one other), with the edge.
+    pub fn incoherent_triangle(&self) -> Option<(usize, [usize; 2])> {
+        let mut directed: HashMap<[usize; 2], usize> = HashMap::new();
+        for (k, t) in self.triangles.iter().enumerate() {
+            for e in 0..3 {
+                let edge = [t[e], t[(e + 1) % 3]];
+                if directed.insert(edge, k).is_some() {
+                    return Some((k, edge));
+                }
+            }
+        }
+        None
+    }
+
+    /// Area-weighted mean of `n . side` over the triangles: +1 when every normal points along
+    /// `side`, -1 when every one points against it.
+    pub fn mean_facing(&self, side: &Vector3<f64>) -> f64 {
+        let (mut along, mut total) = (0.0, 0.0);
+        for t in &self.triangles {
+            let [a, b, c] = t.map(|i| self.vertices[i]);
+            let n = (b - a).cross(&(c - a));
+            along += n.dot(side);
+            total += n.norm();
+        }
+        along / (total * side.norm())
+    }
+
+    /// Checks that the surface is coherently oriented and says whether its normals point to
+    /// `blank_side` (the direction from the tool towards the blank), on the area-weighted mean.
+    pub fn facing(&self, blank_side: &Vector3<f64>) -> Result<Facing, String> {
+        if let Some((k, [a, b])) = self.incoherent_triangle() {
+            return Err(format!(
+                "triangle {k} runs its edge between vertices {a} and {b} the same way as another                  triangle (or a third triangle shares that edge): the surface's normals are not                  consistently oriented there"
+            ));
+        }
+        Ok(if self.mean_facing(blank_side) >= 0.0 {
+            Facing::Towards
+        } else {
+            Facing::Away
+        })
+    }
+
+    /// The same surface with every triangle's orientation reversed.
+    pub fn flipped(mut self) -> Self {
+        for t in &mut self.triangles {
+            t.swap(1, 2);
+        }
+        self
     }
 }
 
@@ -120,6 +184,42 @@ mod tests {
         let behind = Vector3::new(0.0, 0.0, -0.5);
         let (n, gap) = left.direction_to(&behind);
         assert!((gap + 0.5 * c).abs() < 1e-15 && n == left.normal);
+    }
+
+    /// A unit square in z = 0 as two triangles, normals +z.
+    fn square() -> TriangleSurface {
+        TriangleSurface {
+            vertices: vec![
+                Vector3::zeros(),
+                Vector3::x(),
+                Vector3::new(1.0, 1.0, 0.0),
+                Vector3::y(),
+            ],
+            triangles: vec![[0, 1, 2], [0, 2, 3]],
+        }
+    }
+
+    #[test]
+    fn facing_and_flipping() {
+        let up = square();
+        assert_eq!(up.facing(&Vector3::z()), Ok(Facing::Towards));
+        assert_eq!(up.facing(&-Vector3::z()), Ok(Facing::Away));
+        assert!((up.mean_facing(&Vector3::z()) - 1.0).abs() < 1e-15);
+        let down = up.flipped();
+        assert!((down.mean_facing(&Vector3::z()) + 1.0).abs() < 1e-15);
+        assert_eq!(down.facing(&-Vector3::z()), Ok(Facing::Towards));
+    }
+
+    #[test]
+    fn an_incoherent_surface_is_refused_with_the_triangle() {
+        let mut bad = square();
+        bad.triangles[1] = [0, 3, 2];
+        let e = bad.facing(&Vector3::z()).unwrap_err();
+        assert!(
+            e.starts_with("triangle 1 runs its edge between vertices"),
+            "{e}"
+        );
+        assert!(square().incoherent_triangle().is_none());
     }
 
     #[test]

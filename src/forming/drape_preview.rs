@@ -2,7 +2,8 @@
 //! net of the blank's fabric laid on the part of the punch that the stroke forms, in seconds,
 //! with the same shear-angle outputs as a forming run.
 
-use super::scenario::Scenario;
+use super::scenario::{BlankShape, Scenario};
+use super::setup::blank_mesh;
 use crate::drape::{drape, DoubleDome, DrapeParams, DrapeResult, DrapeSurface};
 
 /// The punch of the scenario (hemisphere or double dome) down to the stroke's depth: the part
@@ -47,18 +48,23 @@ impl Generators {
 
 /// Drapes the scenario's fabric (cells of the blank's element size) from the generators'
 /// start over the formed cap.
+/// A blank read from a file is draped with cells of its element size (`Mesh::element_size`).
 pub fn drape_preview(s: &Scenario, generators: &Generators) -> Result<DrapeResult, String> {
+    let tools = s.built_in_tools("the drape preview")?;
     let surface = FormedCap {
         dome: DoubleDome {
-            radius: s.tools.punch_radius,
-            half_length: s.ridge_half_length(),
+            radius: tools.punch_radius,
+            half_length: tools.ridge_half_length(),
         },
-        depth: s.process.stroke.min(s.tools.punch_radius),
+        depth: s.process.stroke.min(tools.punch_radius),
     };
-    let cell = s.blank.element_size;
+    let cell = match s.blank.shape {
+        BlankShape::Rectangle { element_size, .. } => element_size,
+        BlankShape::File { .. } => blank_mesh(s)?.0.element_size(),
+    };
     let (x0, y0) = generators.start;
     let reach =
-        0.5 * std::f64::consts::PI * s.tools.punch_radius + s.ridge_half_length() + x0.hypot(y0);
+        0.5 * std::f64::consts::PI * tools.punch_radius + tools.ridge_half_length() + x0.hypot(y0);
     let params = DrapeParams {
         cell,
         start: generators.start,

@@ -4,6 +4,7 @@
 
 use crate::io::describe_toml_error;
 use crate::mesh::DiagonalPattern;
+use nalgebra::Vector3;
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 
@@ -12,39 +13,184 @@ use std::path::{Path, PathBuf};
 pub struct Scenario {
     pub origin: String,
     pub blank: Blank,
-    pub tools: Tools,
+    pub boundary: Vec<Boundary>,
+    pub tools: ToolSet,
     pub process: Process,
     pub output: Output,
 }
 
-/// The blank: a rectangular ply of one material card.
-#[derive(Clone, Debug, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
+/// The blank: one ply of one material card, either a rectangle meshed here or a mesh file.
+#[derive(Clone, Debug, PartialEq)]
 pub struct Blank {
     /// Material card (TOML), relative to the scenario file.
     pub card: PathBuf,
-    /// Size along x and y (mm), centred on the punch axis.
-    pub width: f64,
-    pub length: f64,
-    /// Target element size (mm).
-    pub element_size: f64,
-    /// Warp angle from x (degrees).
-    #[serde(default)]
+    pub shape: BlankShape,
+    /// Warp angle (degrees): the reference direction turned by it about z.
     pub ply_angle: f64,
-    /// Cell pattern; single diagonals by default (bending is accurate on them, see
+    /// Reference direction of the warp (global, unit), projected onto each element
+    /// (`mesh::orientation`); a mesh file's own orientations take precedence.
+    pub reference_direction: Vector3<f64>,
+}
+
+/// Where the blank's mesh comes from.
+#[derive(Clone, Debug, PartialEq)]
+pub enum BlankShape {
+    /// Size along x and y (mm), centred on the punch axis; target element size (mm); cells cut
+    /// by `pattern` (single diagonals by default: bending is accurate on them, see
     /// `element::bending_triangle`).
-    #[serde(default = "default_pattern")]
-    pub pattern: DiagonalPattern,
+    Rectangle {
+        width: f64,
+        length: f64,
+        element_size: f64,
+        pattern: DiagonalPattern,
+    },
+    /// A Gmsh `.msh` or Abaqus `.inp` file (relative to the scenario), in mm, its mid-plane as
+    /// at the start of the stroke; only the elements of `element_set` when one is named.
+    File {
+        mesh: PathBuf,
+        element_set: Option<String>,
+    },
 }
 
-fn default_pattern() -> DiagonalPattern {
-    DiagonalPattern::Right
+/// The `[blank]` table as written.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct BlankTable {
+    card: PathBuf,
+    width: Option<f64>,
+    length: Option<f64>,
+    element_size: Option<f64>,
+    pattern: Option<DiagonalPattern>,
+    mesh: Option<PathBuf>,
+    element_set: Option<String>,
+    #[serde(default)]
+    ply_angle: f64,
+    reference_direction: Option<[f64; 3]>,
 }
 
-/// The tool set: a hemispherical (or double-dome) punch, a die with a round (or stadium-shaped)
-/// opening and a flat blank holder around it (`contact::tools`).
+impl BlankTable {
+    /// The blank, paths resolved against `folder`: a rectangle or a file, never both.
+    fn resolve(self, folder: &Path) -> Result<Blank, String> {
+        let shape = match self.mesh {
+            Some(mesh) => {
+                let rectangle_keys = [
+                    ("width", self.width.is_some()),
+                    ("length", self.length.is_some()),
+                    ("element_size", self.element_size.is_some()),
+                    ("pattern", self.pattern.is_some()),
+                ];
+                if let Some((key, _)) = rectangle_keys.iter().find(|(_, given)| *given) {
+                    return Err(format!(
+                        "blank.{key} is for the built-in rectangle; a blank read from blank.mesh \
+                         takes its size from the file: remove one of them"
+                    ));
+                }
+                BlankShape::File {
+                    mesh: folder.join(mesh),
+                    element_set: self.element_set,
+                }
+            }
+            None => {
+                if self.element_set.is_some() {
+                    return Err(
+                        "blank.element_set names a set of blank.mesh, which is not given".into(),
+                    );
+                }
+                let need = |key: &str, v: Option<f64>| {
+                    v.ok_or_else(|| {
+                        format!(
+                            "blank.{key} is needed (or blank.mesh = \"file.msh\" or \
+                             \"file.inp\" for a meshed blank)"
+                        )
+                    })
+                };
+                BlankShape::Rectangle {
+                    width: need("width", self.width)?,
+                    length: need("length", self.length)?,
+                    element_size: need("element_size", self.element_size)?,
+                    pattern: self.pattern.unwrap_or(DiagonalPattern::Right),
+                }
+            }
+        };
+        let direction = Vector3::from(self.reference_direction.unwrap_or([1.0, 0.0, 0.0]));
+        if !(direction.iter().all(|c| c.is_finite()) && direction.norm() > 0.0) {
+            return Err(format!(
+                "blank.reference_direction = {:?} must be a non-zero vector",
+                direction.as_slice()
+            ));
+        }
+        Ok(Blank {
+            card: folder.join(self.card),
+            shape,
+            ply_angle: self.ply_angle,
+            reference_direction: direction.normalize(),
+        })
+    }
+}
+
+/// A node or element set of the blank's mesh held along some axes (a symmetry plane, a
+/// clamp): the `[[boundary]]` tables.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
+pub struct Boundary {
+    /// A node set of the mesh (the built-in rectangle has bottom, top, left, right, all) ...
+    pub node_set: Option<String>,
+    /// ... or an element set, whose nodes are held.
+    pub element_set: Option<String>,
+    /// Axes held: any of "x", "y", "z".
+    pub held: Vec<String>,
+}
+
+/// Whether a boundary names a node or an element set.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SetKind {
+    Node,
+    Element,
+}
+
+impl Boundary {
+    /// The held axes as a mask (x, y, z), checked.
+    pub fn mask(&self) -> Result<[bool; 3], String> {
+        let mut mask = [false; 3];
+        for axis in &self.held {
+            let k = match axis.as_str() {
+                "x" => 0,
+                "y" => 1,
+                "z" => 2,
+                other => {
+                    return Err(format!(
+                        "boundary.held: \"{other}\" is not an axis; use \"x\", \"y\" or \"z\""
+                    ))
+                }
+            };
+            mask[k] = true;
+        }
+        if mask == [false; 3] {
+            return Err("boundary.held is empty: name the axes held (\"x\", \"y\", \"z\")".into());
+        }
+        Ok(mask)
+    }
+
+    /// The set's name and kind: exactly one of the two is given.
+    pub fn set(&self) -> Result<(&str, SetKind), String> {
+        match (&self.node_set, &self.element_set) {
+            (Some(n), None) => Ok((n, SetKind::Node)),
+            (None, Some(e)) => Ok((e, SetKind::Element)),
+            _ => Err("each [[boundary]] names one node_set or one element_set".into()),
+        }
+    }
+}
+
+/// The tools: the built-in set ([`Tools`]) or surfaces read from files ([`ToolFiles`]).
+#[derive(Clone, Debug, PartialEq)]
+pub enum ToolSet {
+    BuiltIn(Tools),
+    Files(ToolFiles),
+}
+
+/// The built-in tool set: a hemispherical (or double-dome) punch, a die with a round (or
+/// stadium-shaped) opening and a flat blank holder around it (`contact::tools`).
+#[derive(Clone, Debug, PartialEq)]
 pub struct Tools {
     /// "hemisphere" or "double-dome".
     pub shape: String,
@@ -58,6 +204,112 @@ pub struct Tools {
     pub holder_inner_radius: Option<f64>,
     /// Target edge length of the tool meshes (mm).
     pub resolution: f64,
+}
+
+/// Tool surfaces read from files (`shape = "files"`): STL, Gmsh `.msh` or Abaqus `.inp`, in mm,
+/// placed as at the start of the stroke (stroke axis z, the blank's mid-plane at z = 0, the
+/// punch below moving up, the die above, the holder below), each surface the face of its tool
+/// that meets the blank.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ToolFiles {
+    pub punch: ToolFile,
+    pub die: ToolFile,
+    pub holder: Option<ToolFile>,
+    /// Distance from the stroke axis beyond which the blank lies on the die's flat face (mm):
+    /// where the wrinkle measures look. Without it they are not computed.
+    pub flange_radius: Option<f64>,
+}
+
+/// One tool's surface: a file and, for mesh files, optionally an element set of it.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ToolFile {
+    pub file: PathBuf,
+    pub element_set: Option<String>,
+}
+
+/// The `[tools]` table as written: `shape` decides which keys belong.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ToolsTable {
+    shape: String,
+    half_length: Option<f64>,
+    punch_radius: Option<f64>,
+    die_opening_radius: Option<f64>,
+    die_fillet_radius: Option<f64>,
+    holder_inner_radius: Option<f64>,
+    resolution: Option<f64>,
+    punch: Option<ToolFile>,
+    die: Option<ToolFile>,
+    holder: Option<ToolFile>,
+    flange_radius: Option<f64>,
+}
+
+impl ToolsTable {
+    /// The tool set, file paths resolved against `folder`; keys of the other kind of tool set
+    /// are errors.
+    fn resolve(self, folder: &Path) -> Result<ToolSet, String> {
+        if self.shape == "files" {
+            return self.files(folder).map(ToolSet::Files);
+        }
+        for (key, given) in [
+            ("punch", self.punch.is_some()),
+            ("die", self.die.is_some()),
+            ("holder", self.holder.is_some()),
+            ("flange_radius", self.flange_radius.is_some()),
+        ] {
+            if given {
+                return Err(format!(
+                    "tools.{key} is for tool surfaces read from files: set tools.shape = \"files\""
+                ));
+            }
+        }
+        let shape = self.shape;
+        let need = |key: &str, v: Option<f64>| {
+            v.ok_or_else(|| format!("tools.{key} is needed for tools.shape = \"{shape}\""))
+        };
+        Ok(ToolSet::BuiltIn(Tools {
+            punch_radius: need("punch_radius", self.punch_radius)?,
+            die_opening_radius: need("die_opening_radius", self.die_opening_radius)?,
+            die_fillet_radius: need("die_fillet_radius", self.die_fillet_radius)?,
+            resolution: need("resolution", self.resolution)?,
+            half_length: self.half_length,
+            holder_inner_radius: self.holder_inner_radius,
+            shape,
+        }))
+    }
+
+    fn files(self, folder: &Path) -> Result<ToolFiles, String> {
+        let built_in_keys = [
+            ("half_length", self.half_length.is_some()),
+            ("punch_radius", self.punch_radius.is_some()),
+            ("die_opening_radius", self.die_opening_radius.is_some()),
+            ("die_fillet_radius", self.die_fillet_radius.is_some()),
+            ("holder_inner_radius", self.holder_inner_radius.is_some()),
+            ("resolution", self.resolution.is_some()),
+        ];
+        if let Some((key, _)) = built_in_keys.iter().find(|(_, given)| *given) {
+            return Err(format!(
+                "tools.{key} is for the built-in tool shapes; with tools.shape = \"files\" the \
+                 tools are the surfaces of tools.punch, tools.die and tools.holder"
+            ));
+        }
+        let need = |key: &str, file: Option<ToolFile>| {
+            file.ok_or_else(|| {
+                format!("tools.{key} = {{ file = \"...\" }} is needed with tools.shape = \"files\"")
+            })
+        };
+        let at = |t: ToolFile| ToolFile {
+            file: folder.join(t.file),
+            ..t
+        };
+        Ok(ToolFiles {
+            punch: at(need("punch", self.punch)?),
+            die: at(need("die", self.die)?),
+            holder: self.holder.map(at),
+            flange_radius: self.flange_radius,
+        })
+    }
 }
 
 /// Forming temperature, punch travel, blank-holder force, friction, scaling.
@@ -140,8 +392,10 @@ fn default_history() -> usize {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct ScenarioFile {
-    blank: Blank,
-    tools: Tools,
+    blank: BlankTable,
+    #[serde(default)]
+    boundary: Vec<Boundary>,
+    tools: ToolsTable,
     process: Process,
     #[serde(default)]
     output: Output,
@@ -180,11 +434,9 @@ impl Scenario {
         let folder = path.parent().unwrap_or(Path::new("."));
         let scenario = Scenario {
             origin: origin.clone(),
-            blank: Blank {
-                card: folder.join(&file.blank.card),
-                ..file.blank
-            },
-            tools: file.tools,
+            blank: file.blank.resolve(folder).map_err(error)?,
+            boundary: file.boundary,
+            tools: file.tools.resolve(folder).map_err(error)?,
             process: file.process,
             output: file.output,
         };
@@ -192,9 +444,24 @@ impl Scenario {
         Ok(scenario)
     }
 
-    /// Half-length of the punch's ridge (mm): 0 for the hemisphere.
+    /// The built-in tool set, or an error naming what needs it (`what`).
+    pub fn built_in_tools(&self, what: &str) -> Result<&Tools, String> {
+        match &self.tools {
+            ToolSet::BuiltIn(t) => Ok(t),
+            ToolSet::Files(_) => Err(format!(
+                "{what} needs a built-in tool shape (tools.shape = \"hemisphere\" or \
+                 \"double-dome\"), not tools read from files"
+            )),
+        }
+    }
+
+    /// Half-length of the punch's ridge (mm): 0 for the hemisphere and for tool files (whose
+    /// measures are taken about the stroke axis).
     pub fn ridge_half_length(&self) -> f64 {
-        self.tools.half_length.unwrap_or(0.0)
+        match &self.tools {
+            ToolSet::BuiltIn(t) => t.ridge_half_length(),
+            ToolSet::Files(_) => 0.0,
+        }
     }
 
     /// Distance (mm) of `(x, y)` from the punch's axis (hemisphere) or ridge (double dome):
@@ -203,31 +470,71 @@ impl Scenario {
         crate::contact::distance_from_ridge(self.ridge_half_length(), x, y)
     }
 
-    /// The holder's inner radius.
-    pub fn holder_inner_radius(&self) -> f64 {
-        self.tools
-            .holder_inner_radius
-            .unwrap_or(self.tools.die_opening_radius + self.tools.die_fillet_radius)
+    /// Whether the blank-holder is in the run (a force or a gap drives it).
+    pub fn has_holder(&self) -> bool {
+        self.process.blank_holder_force > 0.0 || self.process.blank_holder_gap.is_some()
     }
 
     /// Consistency: sizes positive, the punch passes through the die opening, the blank
-    /// reaches over the holder, the stroke stays within the die.
+    /// reaches over the holder, the stroke stays within the die. Checks that need the meshes
+    /// (a blank or tools read from files) are made when the model is built.
     fn check(&self) -> Result<(), String> {
-        let (b, t, p) = (&self.blank, &self.tools, &self.process);
-        for (key, value) in [
-            ("blank.width", b.width),
-            ("blank.length", b.length),
-            ("blank.element_size", b.element_size),
-            ("tools.punch_radius", t.punch_radius),
-            ("tools.die_opening_radius", t.die_opening_radius),
-            ("tools.die_fillet_radius", t.die_fillet_radius),
-            ("tools.resolution", t.resolution),
-            ("process.stroke", p.stroke),
-            ("process.punch_speed", p.punch_speed),
-        ] {
-            positive(key, value)?;
+        self.check_blank()?;
+        self.check_process()?;
+        match &self.tools {
+            ToolSet::BuiltIn(t) => self.check_built_in_tools(t)?,
+            ToolSet::Files(f) => {
+                if let Some(r) = f.flange_radius {
+                    positive("tools.flange_radius", r)?;
+                }
+                if self.has_holder() && f.holder.is_none() {
+                    return Err(
+                        "process.blank_holder_force or blank_holder_gap needs a holder: give \
+                         tools.holder = { file = \"...\" }"
+                            .into(),
+                    );
+                }
+            }
         }
-        self.check_shape()?;
+        for boundary in &self.boundary {
+            boundary.set()?;
+            boundary.mask()?;
+        }
+        if let Some(angle) = self.output.locking_angle {
+            if !(angle.is_finite() && angle > 0.0 && angle < 90.0) {
+                return Err(format!(
+                    "output.locking_angle = {angle} must lie between 0 and 90 degrees"
+                ));
+            }
+        }
+        if self.output.history_points == 0 {
+            return Err("output.history_points must be at least 1".into());
+        }
+        Ok(())
+    }
+
+    fn check_blank(&self) -> Result<(), String> {
+        if let BlankShape::Rectangle {
+            width,
+            length,
+            element_size,
+            ..
+        } = self.blank.shape
+        {
+            positive("blank.width", width)?;
+            positive("blank.length", length)?;
+            positive("blank.element_size", element_size)?;
+        }
+        if !self.blank.ply_angle.is_finite() {
+            return Err("blank.ply_angle must be a number (degrees)".into());
+        }
+        Ok(())
+    }
+
+    fn check_process(&self) -> Result<(), String> {
+        let p = &self.process;
+        positive("process.stroke", p.stroke)?;
+        positive("process.punch_speed", p.punch_speed)?;
         if !(p.temperature.is_finite()) {
             return Err("process.temperature must be a number".into());
         }
@@ -269,6 +576,19 @@ impl Scenario {
         if let Some(dt) = p.target_time_step {
             positive("process.target_time_step", dt)?;
         }
+        Ok(())
+    }
+
+    fn check_built_in_tools(&self, t: &Tools) -> Result<(), String> {
+        for (key, value) in [
+            ("tools.punch_radius", t.punch_radius),
+            ("tools.die_opening_radius", t.die_opening_radius),
+            ("tools.die_fillet_radius", t.die_fillet_radius),
+            ("tools.resolution", t.resolution),
+        ] {
+            positive(key, value)?;
+        }
+        t.check_shape()?;
         if t.die_opening_radius <= t.punch_radius {
             return Err(format!(
                 "tools.die_opening_radius = {} must exceed tools.punch_radius = {} (plus the \
@@ -276,13 +596,14 @@ impl Scenario {
                 t.die_opening_radius, t.punch_radius
             ));
         }
+        let p = &self.process;
         if p.stroke > 2.0 * t.punch_radius {
             return Err(format!(
                 "process.stroke = {} goes beyond the punch (radius {} with a skirt as tall)",
                 p.stroke, t.punch_radius
             ));
         }
-        let holder = self.holder_inner_radius();
+        let holder = t.holder_inner_radius();
         positive("tools.holder_inner_radius", holder)?;
         if holder <= t.punch_radius {
             return Err(format!(
@@ -290,39 +611,53 @@ impl Scenario {
                 t.punch_radius
             ));
         }
-        let half_side = (0.5 * b.width - self.ridge_half_length()).min(0.5 * b.length);
-        if (p.blank_holder_force > 0.0 || p.blank_holder_gap.is_some()) && half_side <= holder {
-            return Err(format!(
-                "the blank ({} x {} mm) does not reach the blank holder (inner radius {holder} \
-                 mm): it cannot be held",
-                b.width, b.length
-            ));
-        }
-        if b.element_size > 0.25 * t.punch_radius {
-            return Err(format!(
-                "blank.element_size = {} is too coarse for a punch of radius {}: at least four \
-                 elements across the punch radius are needed",
-                b.element_size, t.punch_radius
-            ));
-        }
-        if let Some(angle) = self.output.locking_angle {
-            if !(angle.is_finite() && angle > 0.0 && angle < 90.0) {
+        if let BlankShape::Rectangle {
+            width,
+            length,
+            element_size,
+            ..
+        } = self.blank.shape
+        {
+            let half_side = (0.5 * width - t.ridge_half_length()).min(0.5 * length);
+            if self.has_holder() && half_side <= holder {
                 return Err(format!(
-                    "output.locking_angle = {angle} must lie between 0 and 90 degrees"
+                    "the blank ({width} x {length} mm) does not reach the blank holder (inner \
+                     radius {holder} mm): it cannot be held"
                 ));
             }
-        }
-        if self.output.history_points == 0 {
-            return Err("output.history_points must be at least 1".into());
+            t.check_element_size(element_size, "blank.element_size")?;
         }
         Ok(())
     }
 }
 
-impl Scenario {
+impl Tools {
+    /// Half-length of the punch's ridge (mm): 0 for the hemisphere.
+    pub fn ridge_half_length(&self) -> f64 {
+        self.half_length.unwrap_or(0.0)
+    }
+
+    /// The holder's inner radius.
+    pub fn holder_inner_radius(&self) -> f64 {
+        self.holder_inner_radius
+            .unwrap_or(self.die_opening_radius + self.die_fillet_radius)
+    }
+
+    /// At least four elements of `size` across the punch radius; `what` names the size.
+    pub fn check_element_size(&self, size: f64, what: &str) -> Result<(), String> {
+        if size > 0.25 * self.punch_radius {
+            return Err(format!(
+                "{what} = {size:.3} mm is too coarse for a punch of radius {}: at least four \
+                 elements across the punch radius are needed",
+                self.punch_radius
+            ));
+        }
+        Ok(())
+    }
+
     /// The shape is known, and the ridge's half-length given exactly when it has one.
     fn check_shape(&self) -> Result<(), String> {
-        match (self.tools.shape.as_str(), self.tools.half_length) {
+        match (self.shape.as_str(), self.half_length) {
             ("hemisphere", None) => Ok(()),
             ("hemisphere", Some(_)) => Err(
                 "tools.half_length is for tools.shape = \"double-dome\"; a hemisphere has none"
@@ -335,8 +670,8 @@ impl Scenario {
                     .into(),
             ),
             (other, _) => Err(format!(
-                "tools.shape = \"{other}\": the tool sets available are \"hemisphere\" and \
-                 \"double-dome\""
+                "tools.shape = \"{other}\": the tool sets available are \"hemisphere\", \
+                 \"double-dome\" and \"files\""
             )),
         }
     }

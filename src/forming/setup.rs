@@ -1,20 +1,23 @@
-//! From a scenario to a model: the meshed blank on its card, and the tools placed around it.
+//! From a scenario to a model: the blank's mesh (built in or read from a file) on its card,
+//! its boundary conditions, and the tools placed around it (built in or read from files).
 //!
 //! Conventions of `contact::tools`: stroke axis z, blank mid-plane in z = 0 at the start, the
-//! punch below moving up, the die above, the holder below around the punch. Each tool is
-//! moved off the mid-plane by half the blank's thickness, so that it touches a face of the
-//! blank at the start.
+//! punch below moving up, the die above, the holder below around the punch. Each built-in tool
+//! is moved off the mid-plane by half the blank's thickness, so that it touches a face of the
+//! blank at the start; tools read from files are used where the files put them.
 
-use super::scenario::Scenario;
+use super::scenario::{BlankShape, Scenario, SetKind, ToolFile, ToolFiles, ToolSet, Tools};
 use crate::contact::{
-    distance_from_ridge, double_dome_die, double_dome_holder, double_dome_punch, ContactSettings,
-    DieShape, RigidTool, ToolMotion, TriangleSurface,
+    distance_from_ridge, double_dome_die, double_dome_holder, double_dome_punch, read_stl,
+    ContactSettings, DieShape, Facing, RigidTool, ToolMotion, TriangleSurface,
 };
 use crate::experiment::sheet_test::Crosshead;
 use crate::material::MaterialCard;
-use crate::mesh::rectangle;
-use crate::solver::{Model, SolverSettings};
+use crate::mesh::orientation::{describe_poor_projections, poor_projections, reference_warp};
+use crate::mesh::{read_mesh_file, rectangle, Mesh};
+use crate::solver::{Constraint, Model, Motion, SolverSettings};
 use nalgebra::Vector3;
+use std::path::Path;
 use std::sync::Arc;
 
 /// Contact penalty `s` of `k = s m / dt^2` (MODEL.md §6).
@@ -24,6 +27,10 @@ const PENALTY_SCALE: f64 = 0.1;
 /// every node it touches, light enough to follow the flange.
 const HOLDER_MASS_RATIO: f64 = 10.0;
 
+/// A blank node may start this far (in ply thicknesses) inside a tool read from a file before
+/// the placement is refused: the contact would fling it out at the first step.
+const START_PENETRATION_LIMIT: f64 = 0.1;
+
 /// A scenario made ready to run.
 pub struct FormingModel {
     pub model: Model,
@@ -31,47 +38,57 @@ pub struct FormingModel {
     pub punch: Crosshead,
     pub settings: SolverSettings,
     /// Distance from the punch's ridge (axis) beyond which the blank lies on the die's flat
-    /// face: the flange (mm).
+    /// face: the flange (mm); infinite when unknown (tools from files without
+    /// `tools.flange_radius`), which turns the flange measures off.
     pub flange_radius: f64,
     /// Half-length of the punch's ridge (mm); 0 for a hemisphere.
     pub ridge_half_length: f64,
-    /// Target element size of the blank (mm).
+    /// Element size of the blank (mm): the rectangle's, or `Mesh::element_size` of a file's.
     pub element_size: f64,
     /// Indices of the punch, die and holder (if any) in `model.tools`.
     pub punch_tool: usize,
     pub die_tool: usize,
     pub holder_tool: Option<usize>,
+    /// What the user should know before the run: notes of the mesh readers, tool surfaces
+    /// flipped, fibre projections that are ill-conditioned; one line each.
+    pub notes: Vec<String>,
 }
 
 impl FormingModel {
     pub fn new(s: &Scenario) -> Result<Self, String> {
         let card = MaterialCard::load(&s.blank.card).map_err(|e| e.to_string())?;
         let thickness = card.laminate.reference_thickness();
-        let clearance = s.tools.die_opening_radius - s.tools.punch_radius;
-        if clearance < thickness {
+        let (mesh, mut notes) = blank_mesh(s)?;
+        let element_size = match s.blank.shape {
+            BlankShape::Rectangle { element_size, .. } => element_size,
+            BlankShape::File { .. } => mesh.element_size(),
+        };
+        if let ToolSet::BuiltIn(t) = &s.tools {
+            check_built_in_fit(s, t, &mesh, thickness, element_size)?;
+        }
+        let warp = reference_warp(s.blank.reference_direction, s.blank.ply_angle);
+        if mesh.warp_directions.is_some() && s.blank.ply_angle != 0.0 {
             return Err(format!(
-                "{}: the die opening leaves {clearance} mm around the punch, less than the ply's \
-                 {thickness} mm",
-                s.origin
+                "{}: the blank's mesh file gives the warp direction of every element; \
+                 blank.ply_angle = {} would turn it again: set it in the file (*ORIENTATION) or \
+                 leave blank.ply_angle out",
+                s.origin, s.blank.ply_angle
             ));
         }
-        let (b, p) = (&s.blank, &s.process);
-        let cells = |side: f64| (side / b.element_size).round().max(1.0) as usize;
-        let mesh = rectangle(
-            b.width,
-            b.length,
-            cells(b.width),
-            cells(b.length),
-            b.pattern,
-        );
-        let angle = b.ply_angle.to_radians();
+        notes.extend(describe_poor_projections(
+            &poor_projections(&mesh, &warp),
+            mesh.triangles.len(),
+        ));
+        let constraints = boundary_constraints(s, &mesh)?;
+        let blank_mass = card.density * thickness * mesh.total_area();
+        let p = &s.process;
         let mut model = Model::new(
             mesh,
             card.laminate.time_scaled(p.time_scaling),
             card.density,
             p.temperature,
-            Vector3::new(angle.cos(), angle.sin(), 0.0),
-            Vec::new(),
+            warp,
+            constraints,
         )
         .map_err(|e| e.to_string())?;
         if let Some(rigidity) = card.bending {
@@ -82,8 +99,14 @@ impl FormingModel {
             speed: simulated,
             ramp_time: 0.05 * p.stroke / simulated,
         };
-        let blank_mass = card.density * thickness * b.width * b.length;
-        let (tools, holder_tool) = tool_set(s, thickness, punch, blank_mass)?;
+        let (tools, holder_tool) = match &s.tools {
+            ToolSet::BuiltIn(t) => built_in_tool_set(s, t, thickness, punch, blank_mass)?,
+            ToolSet::Files(f) => {
+                let set = file_tool_set(s, f, (thickness, blank_mass), punch, &mut notes)?;
+                check_start_positions(&model, &set.0, thickness)?;
+                set
+            }
+        };
         let contact = ContactSettings {
             offset: 0.5 * thickness,
             penalty_scale: PENALTY_SCALE,
@@ -99,17 +122,22 @@ impl FormingModel {
             damping: 0.0,
             yarn_damping: 0.06,
         };
+        let flange_radius = match &s.tools {
+            ToolSet::BuiltIn(t) => t.die_opening_radius + t.die_fillet_radius,
+            ToolSet::Files(f) => f.flange_radius.unwrap_or(f64::INFINITY),
+        };
         Ok(Self {
             model,
             card,
             punch,
             settings,
-            flange_radius: s.tools.die_opening_radius + s.tools.die_fillet_radius,
+            flange_radius,
             ridge_half_length: s.ridge_half_length(),
-            element_size: s.blank.element_size,
+            element_size,
             punch_tool: 0,
             die_tool: 1,
             holder_tool,
+            notes,
         })
     }
 }
@@ -125,6 +153,11 @@ impl FormingModel {
         self.distance_from_ridge(x) > self.flange_radius
     }
 
+    /// Whether the flange is known, so that its wrinkle measures mean something.
+    pub fn measures_flange(&self) -> bool {
+        self.flange_radius.is_finite()
+    }
+
     /// Which band around the part a flange point lies in: bands one element size wide,
     /// counted outward from the flange's inner edge (see `run::Wrinkles`).
     pub fn flange_band(&self, x: &Vector3<f64>) -> usize {
@@ -133,26 +166,124 @@ impl FormingModel {
     }
 }
 
-/// Punch, die and (with a blank-holder force) holder, placed off the blank's faces.
-fn tool_set(
+/// The blank's mesh: the rectangle, or the file's (restricted to `element_set` if named), with
+/// the reader's notes. Rigid elements cannot be a blank.
+pub fn blank_mesh(s: &Scenario) -> Result<(Mesh, Vec<String>), String> {
+    match &s.blank.shape {
+        BlankShape::Rectangle {
+            width,
+            length,
+            element_size,
+            pattern,
+        } => {
+            let cells = |side: f64| (side / element_size).round().max(1.0) as usize;
+            let mesh = rectangle(*width, *length, cells(*width), cells(*length), *pattern);
+            Ok((mesh, Vec::new()))
+        }
+        BlankShape::File { mesh, element_set } => {
+            let import = read_mesh_file(mesh).map_err(|e| e.to_string())?;
+            let file = mesh.display();
+            let notes = import
+                .notes
+                .iter()
+                .map(|n| format!("{file}: {n}"))
+                .collect();
+            let (mesh, rigid) = match element_set {
+                Some(set) => {
+                    let (sub, kept) = import
+                        .mesh
+                        .restricted_to(set)
+                        .map_err(|e| format!("{file}: blank.element_set: {e}"))?;
+                    (sub, kept.iter().map(|&t| import.rigid[t]).collect())
+                }
+                None => (import.mesh, import.rigid),
+            };
+            if let Some(t) = rigid.iter().position(|&r| r) {
+                return Err(format!(
+                    "{file}: element {t} of the blank is a rigid element (R3D3/R3D4); a blank is \
+                     made of shell or membrane elements (name the blank's elements with \
+                     blank.element_set, or read rigid elements as a tool)"
+                ));
+            }
+            Ok((mesh, notes))
+        }
+    }
+}
+
+/// The built-in tools' checks that need the blank's mesh: the clearance, the element size
+/// against the punch, and a file's blank reaching over the holder.
+fn check_built_in_fit(
     s: &Scenario,
+    t: &Tools,
+    mesh: &Mesh,
+    thickness: f64,
+    element_size: f64,
+) -> Result<(), String> {
+    let clearance = t.die_opening_radius - t.punch_radius;
+    if clearance < thickness {
+        return Err(format!(
+            "{}: the die opening leaves {clearance} mm around the punch, less than the ply's \
+             {thickness} mm",
+            s.origin
+        ));
+    }
+    if let BlankShape::File { mesh: file, .. } = &s.blank.shape {
+        let what = format!("the element size of {}", file.display());
+        t.check_element_size(element_size, &what)
+            .map_err(|e| format!("{}: {e}", s.origin))?;
+        let reach = mesh
+            .nodes
+            .iter()
+            .map(|x| distance_from_ridge(t.ridge_half_length(), x.x, x.y))
+            .fold(0.0, f64::max);
+        if s.has_holder() && reach <= t.holder_inner_radius() {
+            return Err(format!(
+                "{}: the blank of {} reaches {reach:.1} mm from the punch axis, not over the \
+                 blank holder (inner radius {} mm): it cannot be held",
+                s.origin,
+                file.display(),
+                t.holder_inner_radius()
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// One constraint per `[[boundary]]`: the nodes of its set held along its axes.
+fn boundary_constraints(s: &Scenario, mesh: &Mesh) -> Result<Vec<Constraint>, String> {
+    s.boundary
+        .iter()
+        .map(|b| {
+            let (name, kind) = b.set().map_err(|e| format!("{}: {e}", s.origin))?;
+            let nodes = match kind {
+                SetKind::Node => mesh.node_set(name).map(<[usize]>::to_vec),
+                SetKind::Element => mesh.nodes_of_element_set(name),
+            }
+            .map_err(|e| format!("{}: boundary: {e}", s.origin))?;
+            Ok(Constraint {
+                name: name.to_string(),
+                nodes,
+                motion: Motion::Components(b.mask().map_err(|e| format!("{}: {e}", s.origin))?),
+            })
+        })
+        .collect()
+}
+
+/// The tools and the holder's index among them (punch and die are 0 and 1).
+type ToolSetup = (Vec<RigidTool>, Option<usize>);
+
+/// Punch, die and (with a blank-holder force or gap) holder, placed off the blank's faces.
+fn built_in_tool_set(
+    s: &Scenario,
+    t: &Tools,
     thickness: f64,
     punch: Crosshead,
     blank_mass: f64,
-) -> Result<(Vec<RigidTool>, Option<usize>), String> {
-    let t = &s.tools;
+) -> Result<ToolSetup, String> {
     let half = 0.5 * thickness;
-    let ridge = s.ridge_half_length();
-    let outer = s.distance_from_ridge(0.5 * s.blank.width, 0.5 * s.blank.length) + 10.0;
+    let ridge = t.ridge_half_length();
+    let outer = blank_reach(s, t) + 10.0;
     let depth = s.process.stroke + t.die_fillet_radius + 10.0;
-    let shifted = |surface: TriangleSurface, dz: f64| TriangleSurface {
-        vertices: surface
-            .vertices
-            .into_iter()
-            .map(|v| v + Vector3::new(0.0, 0.0, dz))
-            .collect(),
-        ..surface
-    };
     let skirt = t.punch_radius;
     let punch_surface = shifted(
         double_dome_punch(ridge, t.punch_radius, skirt, t.resolution)?,
@@ -165,11 +296,56 @@ fn tool_set(
         depth,
     };
     let die_surface = shifted(double_dome_die(ridge, &die, t.resolution)?, half);
+    let mut tools = punch_and_die(s, punch_surface, die_surface, punch, thickness)?;
+    let Some((motion, gap)) = holder_drive(s, blank_mass) else {
+        return Ok((tools, None));
+    };
+    let holder_surface = shifted(
+        double_dome_holder(ridge, t.holder_inner_radius(), outer, t.resolution)?,
+        -half - gap,
+    );
+    let friction = s.process.friction.holder;
+    tools.push(RigidTool::new(
+        "blank holder",
+        holder_surface,
+        motion,
+        friction,
+        thickness,
+    )?);
+    Ok((tools, Some(2)))
+}
+
+/// How far the built-in rectangle reaches from the punch's ridge (mm); the built-in tools are
+/// made that wide (plus a margin). A file's blank: its farthest node.
+fn blank_reach(s: &Scenario, t: &Tools) -> f64 {
+    match s.blank.shape {
+        BlankShape::Rectangle { width, length, .. } => {
+            distance_from_ridge(t.ridge_half_length(), 0.5 * width, 0.5 * length)
+        }
+        BlankShape::File { .. } => blank_mesh(s)
+            .map(|(mesh, _)| {
+                mesh.nodes
+                    .iter()
+                    .map(|x| distance_from_ridge(t.ridge_half_length(), x.x, x.y))
+                    .fold(0.0, f64::max)
+            })
+            .unwrap_or(0.0),
+    }
+}
+
+/// The punch (velocity-driven along +z) and the fixed die, with the scenario's friction.
+fn punch_and_die(
+    s: &Scenario,
+    punch_surface: TriangleSurface,
+    die_surface: TriangleSurface,
+    punch: Crosshead,
+    thickness: f64,
+) -> Result<Vec<RigidTool>, String> {
     let friction = &s.process.friction;
     let punch_motion = ToolMotion::Velocity(Arc::new(move |time| {
         Vector3::new(0.0, 0.0, punch.velocity(time))
     }));
-    let mut tools = vec![
+    Ok(vec![
         RigidTool::new(
             "punch",
             punch_surface,
@@ -184,28 +360,166 @@ fn tool_set(
             friction.die,
             thickness,
         )?,
-    ];
-    let (holder_motion, gap) = match (s.process.blank_holder_gap, s.process.blank_holder_force) {
-        (Some(gap), _) => (ToolMotion::Fixed, gap),
-        (None, force) if force > 0.0 => (
+    ])
+}
+
+/// The holder's motion and its gap below its touching position, when the scenario has one:
+/// pushed with the blank-holder force (free along z), or fixed at the gap.
+fn holder_drive(s: &Scenario, blank_mass: f64) -> Option<(ToolMotion, f64)> {
+    match (s.process.blank_holder_gap, s.process.blank_holder_force) {
+        (Some(gap), _) => Some((ToolMotion::Fixed, gap)),
+        (None, force) if force > 0.0 => Some((
             ToolMotion::Force {
                 force: Vector3::new(0.0, 0.0, force),
                 mass: HOLDER_MASS_RATIO * blank_mass,
             },
             0.0,
-        ),
-        (None, _) => return Ok((tools, None)),
+        )),
+        (None, _) => None,
+    }
+}
+
+/// `surface` moved by `dz` along the stroke axis.
+fn shifted(surface: TriangleSurface, dz: f64) -> TriangleSurface {
+    TriangleSurface {
+        vertices: surface
+            .vertices
+            .into_iter()
+            .map(|v| v + Vector3::new(0.0, 0.0, dz))
+            .collect(),
+        ..surface
+    }
+}
+
+/// Tools read from files, each checked for coherent normals and turned to face the blank
+/// (the punch and holder from below, the die from above); a holder fixed at a gap is moved
+/// down by it. What was noticed goes to `notes`.
+fn file_tool_set(
+    s: &Scenario,
+    f: &ToolFiles,
+    (thickness, blank_mass): (f64, f64),
+    punch: Crosshead,
+    notes: &mut Vec<String>,
+) -> Result<ToolSetup, String> {
+    let up = Vector3::z();
+    let punch_surface = tool_surface("punch", &f.punch, &up, notes)?;
+    let die_surface = tool_surface("die", &f.die, &-up, notes)?;
+    check_stroke(s, &punch_surface, &f.punch.file)?;
+    let mut tools = punch_and_die(s, punch_surface, die_surface, punch, thickness)?;
+    let (Some(holder), Some((motion, gap))) = (&f.holder, holder_drive(s, blank_mass)) else {
+        if f.holder.is_some() {
+            notes.push(
+                "tools.holder is given but neither process.blank_holder_force nor \
+                 blank_holder_gap: the holder is left out"
+                    .into(),
+            );
+        }
+        return Ok((tools, None));
     };
-    let holder_surface = shifted(
-        double_dome_holder(ridge, s.holder_inner_radius(), outer, t.resolution)?,
-        -half - gap,
-    );
+    let holder_surface = shifted(tool_surface("holder", holder, &up, notes)?, -gap);
     tools.push(RigidTool::new(
         "blank holder",
         holder_surface,
-        holder_motion,
-        friction.holder,
+        motion,
+        s.process.friction.holder,
         thickness,
     )?);
     Ok((tools, Some(2)))
+}
+
+/// A tool's surface from its file (STL, Gmsh or Abaqus, by extension), facing `blank_side`:
+/// a coherent surface whose normals point away is flipped, with a note.
+fn tool_surface(
+    name: &str,
+    tool: &ToolFile,
+    blank_side: &Vector3<f64>,
+    notes: &mut Vec<String>,
+) -> Result<TriangleSurface, String> {
+    let file = tool.file.display().to_string();
+    let surface = read_tool_file(tool)?;
+    match surface.facing(blank_side) {
+        Ok(Facing::Towards) => {
+            notes.push(format!(
+                "{name}: {} triangles from {file}, normals towards the blank",
+                surface.triangles.len()
+            ));
+            Ok(surface)
+        }
+        Ok(Facing::Away) => {
+            notes.push(format!(
+                "{name}: {} triangles from {file}; their normals pointed away from the blank \
+                 and were flipped",
+                surface.triangles.len()
+            ));
+            Ok(surface.flipped())
+        }
+        Err(e) => Err(format!("{file} ({name}): {e}")),
+    }
+}
+
+/// The triangles of a tool file: every facet of an STL; the elements (or `element_set`) of a
+/// mesh file, rigid or not.
+fn read_tool_file(tool: &ToolFile) -> Result<TriangleSurface, String> {
+    let is_stl = tool
+        .file
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("stl"));
+    if is_stl {
+        if tool.element_set.is_some() {
+            return Err(format!(
+                "{}: element_set is for mesh files; an STL file is one surface",
+                tool.file.display()
+            ));
+        }
+        return read_stl(&tool.file).map_err(|e| e.to_string());
+    }
+    let import = read_mesh_file(&tool.file).map_err(|e| e.to_string())?;
+    let mesh = match &tool.element_set {
+        Some(set) => {
+            import
+                .mesh
+                .restricted_to(set)
+                .map_err(|e| format!("{}: {e}", tool.file.display()))?
+                .0
+        }
+        None => import.mesh,
+    };
+    Ok(TriangleSurface {
+        vertices: mesh.nodes,
+        triangles: mesh.triangles,
+    })
+}
+
+/// The punch must be at least as tall as the stroke, or the blank would be pushed by nothing.
+fn check_stroke(s: &Scenario, punch: &TriangleSurface, file: &Path) -> Result<(), String> {
+    let (lo, hi) = punch.bounds();
+    if s.process.stroke > hi.z - lo.z {
+        return Err(format!(
+            "{}: process.stroke = {} mm is more than the height of the punch of {} ({:.1} mm)",
+            s.origin,
+            s.process.stroke,
+            file.display(),
+            hi.z - lo.z
+        ));
+    }
+    Ok(())
+}
+
+/// No blank node may start inside a tool: the first contact force would fling it out.
+fn check_start_positions(model: &Model, tools: &[RigidTool], thickness: f64) -> Result<(), String> {
+    let half = 0.5 * thickness;
+    for tool in tools {
+        for (node, x) in model.mesh.nodes.iter().enumerate() {
+            let gap = tool.gap(x, half);
+            if gap < -START_PENETRATION_LIMIT * thickness {
+                return Err(format!(
+                    "the blank starts {:.3} mm inside the {} at node {node} ({:.2}, {:.2}, \
+                     {:.2}) mm: place the tool surfaces as at the start of the stroke, half the \
+                     ply's thickness ({half} mm) off its mid-plane",
+                    -gap, tool.name, x.x, x.y, x.z
+                ));
+            }
+        }
+    }
+    Ok(())
 }

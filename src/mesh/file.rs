@@ -1,6 +1,7 @@
 //! What the mesh-file readers (Gmsh, Abaqus) give back, and how they fail.
 
 use super::Mesh;
+use std::path::Path;
 
 /// A mesh read from a file: the triangles (quadrilaterals split in two), the sets, and what
 /// the reader noticed on the way.
@@ -43,15 +44,37 @@ impl MeshFileError {
     }
 }
 
+/// Reads a mesh file by its extension: `.msh` (Gmsh 4.1, ASCII or binary) or `.inp` (Abaqus).
+pub fn read_mesh_file(path: &Path) -> Result<MeshImport, MeshFileError> {
+    let extension = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase());
+    match extension.as_deref() {
+        Some("msh") => super::gmsh::read_msh(path),
+        Some("inp") => super::abaqus::read_inp(path),
+        _ => Err(MeshFileError::in_file(
+            path.display().to_string(),
+            "unknown mesh format: the blank and tool meshes read are Gmsh .msh (4.1) and \
+             Abaqus .inp files (and STL for tools)",
+        )),
+    }
+}
+
+/// Diagonals whose squared lengths differ by less than this share are taken as equal, and the
+/// quadrilateral is split from its first corner: on square cells rounding would otherwise pick
+/// the diagonal at random (and differently for the 16-digit ASCII and the binary copy of one
+/// mesh), where a regular pattern is what the bending patch wants (docs/forming.md, "Bending").
+const EQUAL_DIAGONALS: f64 = 1e-9;
+
 /// The two triangles of the quadrilateral `quad` (corners in order round it), split along its
-/// shorter diagonal, both keeping the quadrilateral's orientation. **Choice:** the shorter
-/// diagonal gives the better-shaped pair; the solver's elements are triangles (see
-/// docs/meshes.md).
+/// shorter diagonal, both keeping the quadrilateral's orientation; equal diagonals (within
+/// [`EQUAL_DIAGONALS`]) from the first corner. **Choice:** the shorter diagonal gives the
+/// better-shaped pair; the solver's elements are triangles (see docs/meshes.md).
 pub fn split_quadrilateral(nodes: &[nalgebra::Vector3<f64>], quad: [usize; 4]) -> [[usize; 3]; 2] {
     let [a, b, c, d] = quad;
     let ac = (nodes[c] - nodes[a]).norm_squared();
     let bd = (nodes[d] - nodes[b]).norm_squared();
-    if ac <= bd {
+    if ac <= bd * (1.0 + EQUAL_DIAGONALS) {
         [[a, b, c], [a, c, d]]
     } else {
         [[a, b, d], [b, c, d]]

@@ -7,7 +7,7 @@ pub mod gmsh;
 pub mod orientation;
 pub mod rectangle;
 
-pub use file::{MeshFileError, MeshImport};
+pub use file::{read_mesh_file, MeshFileError, MeshImport};
 pub use rectangle::{rectangle, DiagonalPattern};
 
 use nalgebra::Vector3;
@@ -45,7 +45,7 @@ pub enum MeshError {
     Degenerate { triangle: usize, area: f64 },
     #[error("node {node} has a non-finite coordinate")]
     NonFinite { node: usize },
-    #[error("no node set named '{name}' (the mesh has: {available})")]
+    #[error("no set named '{name}' (the mesh has: {available})")]
     UnknownSet { name: String, available: String },
     #[error("{kind} set '{name}' refers to {kind} {index}, but the mesh has {count}")]
     SetOutOfRange {
@@ -118,6 +118,104 @@ impl Mesh {
         (a + b + c) / 3.0
     }
 
+    /// Total reference area (mm^2).
+    pub fn total_area(&self) -> f64 {
+        (0..self.triangles.len()).map(|t| self.area(t)).sum()
+    }
+
+    /// Element size of a mesh made elsewhere (mm): the mean of `sqrt(2 A)` over the
+    /// triangles, the side of the square cell that two of them make (the rectangle's
+    /// `element_size` for its single diagonals; 0.93 of the side of an equilateral triangle).
+    pub fn element_size(&self) -> f64 {
+        let sum: f64 = (0..self.triangles.len())
+            .map(|t| (2.0 * self.area(t)).sqrt())
+            .sum();
+        sum / self.triangles.len().max(1) as f64
+    }
+
+    /// The triangles of the element set `name`.
+    pub fn element_set(&self, name: &str) -> Result<&[usize], MeshError> {
+        self.element_sets
+            .get(name)
+            .map(Vec::as_slice)
+            .ok_or_else(|| MeshError::UnknownSet {
+                name: name.to_string(),
+                available: self.set_names(),
+            })
+    }
+
+    /// The nodes of the triangles of the element set `name`, in increasing order.
+    pub fn nodes_of_element_set(&self, name: &str) -> Result<Vec<usize>, MeshError> {
+        let mut nodes: Vec<usize> = self
+            .element_set(name)?
+            .iter()
+            .flat_map(|&t| self.triangles[t])
+            .collect();
+        nodes.sort_unstable();
+        nodes.dedup();
+        Ok(nodes)
+    }
+
+    /// The mesh of the element set `name` alone: its triangles and their nodes, renumbered in
+    /// order, with the sets and warp directions restricted to them. Also returns, for each
+    /// triangle kept, its index in `self`.
+    pub fn restricted_to(&self, name: &str) -> Result<(Mesh, Vec<usize>), MeshError> {
+        let kept = self.element_set(name)?.to_vec();
+        let mut new_node = vec![None; self.nodes.len()];
+        let mut nodes = Vec::new();
+        let triangles: Vec<[usize; 3]> = kept
+            .iter()
+            .map(|&t| {
+                self.triangles[t].map(|n| {
+                    *new_node[n].get_or_insert_with(|| {
+                        nodes.push(self.nodes[n]);
+                        nodes.len() - 1
+                    })
+                })
+            })
+            .collect();
+        let mut new_triangle = vec![None; self.triangles.len()];
+        for (i, &t) in kept.iter().enumerate() {
+            new_triangle[t] = Some(i);
+        }
+        let renumber = |members: &[usize], map: &[Option<usize>]| -> Vec<usize> {
+            members.iter().filter_map(|&m| map[m]).collect()
+        };
+        let node_sets = self
+            .node_sets
+            .iter()
+            .map(|(k, v)| (k.clone(), renumber(v, &new_node)))
+            .filter(|(_, v)| !v.is_empty())
+            .collect();
+        let element_sets = self
+            .element_sets
+            .iter()
+            .map(|(k, v)| (k.clone(), renumber(v, &new_triangle)))
+            .filter(|(_, v)| !v.is_empty())
+            .collect();
+        let warp_directions = self
+            .warp_directions
+            .as_ref()
+            .map(|d| kept.iter().map(|&t| d[t]).collect());
+        let mesh = Mesh {
+            nodes,
+            triangles,
+            node_sets,
+            element_sets,
+            warp_directions,
+        };
+        Ok((mesh, kept))
+    }
+
+    fn set_names(&self) -> String {
+        self.node_sets
+            .keys()
+            .chain(self.element_sets.keys())
+            .cloned()
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+
     /// The nodes of the set `name`.
     pub fn node_set(&self, name: &str) -> Result<&[usize], MeshError> {
         self.node_sets
@@ -125,12 +223,7 @@ impl Mesh {
             .map(Vec::as_slice)
             .ok_or_else(|| MeshError::UnknownSet {
                 name: name.to_string(),
-                available: self
-                    .node_sets
-                    .keys()
-                    .cloned()
-                    .collect::<Vec<_>>()
-                    .join(", "),
+                available: self.set_names(),
             })
     }
 }
@@ -152,4 +245,46 @@ fn check_sets(
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn element_size_of_single_diagonal_cells_is_the_cell_side() {
+        let mesh = rectangle(160.0, 80.0, 16, 8, DiagonalPattern::Right);
+        assert!((mesh.element_size() - 10.0).abs() < 1e-12);
+        assert!((mesh.total_area() - 160.0 * 80.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn a_mesh_restricted_to_an_element_set_keeps_its_nodes_sets_and_directions() {
+        let mut mesh = rectangle(2.0, 1.0, 2, 1, DiagonalPattern::Right);
+        mesh.element_sets.insert("right".into(), vec![2, 3]);
+        mesh.warp_directions = Some((0..4).map(|t| Vector3::new(1.0, t as f64, 0.0)).collect());
+        let (sub, kept) = mesh.restricted_to("right").unwrap();
+        sub.validate().unwrap();
+        assert_eq!(kept, vec![2, 3]);
+        assert_eq!(sub.triangles.len(), 2);
+        assert_eq!(sub.nodes.len(), 4);
+        for (t, &old) in kept.iter().enumerate() {
+            let a = sub.triangles[t].map(|n| sub.nodes[n]);
+            let b = mesh.triangles[old].map(|n| mesh.nodes[n]);
+            assert_eq!(a, b);
+        }
+        assert_eq!(sub.warp_directions.unwrap()[1], Vector3::new(1.0, 3.0, 0.0));
+        assert_eq!(sub.node_sets["right"].len(), 2);
+        assert!(!sub.node_sets.contains_key("left"));
+        assert_eq!(sub.element_sets["right"], vec![0, 1]);
+        assert_eq!(
+            mesh.nodes_of_element_set("right").unwrap(),
+            vec![1, 2, 4, 5]
+        );
+        let e = mesh.restricted_to("nothing").unwrap_err().to_string();
+        assert!(
+            e.contains("no set named 'nothing'") && e.contains("right"),
+            "{e}"
+        );
+    }
 }

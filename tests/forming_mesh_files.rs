@@ -1,0 +1,106 @@
+//! Issue 6's check of meshes and tools read from files: the hemisphere example formed from the
+//! same blank read from a Gmsh file and from an Abaqus deck (with the ply's direction from
+//! `*ORIENTATION`), and between tools read from STL files, gives the shear angles of the
+//! built-in blank and tools within 0.5° in every element.
+//!
+//! The blank files are `tests/data/meshes/hemisphere-blank-10mm.{msh,inp}` (10 mm quadrilaterals,
+//! made by `make_hemisphere_blanks.py` there, with their own node and element numbering); the
+//! STL files are the built-in tool surfaces written by this test.
+
+mod common;
+
+use common::{repo_path, scratch_dir};
+use nalgebra::Vector3;
+use std::path::Path;
+use thermostamp::contact::write_stl_ascii;
+use thermostamp::forming::{run, FormingModel, Scenario};
+
+/// The hemisphere example on 10 mm cells, 20 mm of stroke; `[blank]` and `[tools]` as given.
+fn scenario_text(blank: &str, tools: &str) -> String {
+    let card = repo_path("materials/t300-5hs-pps.toml");
+    format!(
+        "[blank]\ncard = {card:?}\n{blank}\n\n[tools]\n{tools}\n\n\
+         [process]\ntemperature = 300.0\nstroke = 20.0\npunch_speed = 10.0\n\
+         blank_holder_force = 200.0\ntime_scaling = 10.0\ntarget_time_step = 5e-6\n\n\
+         [process.friction]\npunch = 0.2\ndie = 0.2\nholder = 0.2\n\n\
+         [output]\nhistory_points = 10\n"
+    )
+}
+
+const RECTANGLE: &str = "width = 160.0\nlength = 160.0\nelement_size = 10.0";
+const BUILT_IN_TOOLS: &str = "shape = \"hemisphere\"\npunch_radius = 40.0\n\
+    die_opening_radius = 42.0\ndie_fillet_radius = 5.0\nresolution = 3.0";
+
+fn load(dir: &Path, name: &str, text: &str) -> Scenario {
+    let path = dir.join(name);
+    std::fs::write(&path, text).unwrap();
+    Scenario::load(&path, &[]).unwrap()
+}
+
+/// Runs the scenario; per element, its final centroid and shear angle (degrees).
+fn formed(scenario: &Scenario) -> (FormingModel, Vec<(Vector3<f64>, f64)>) {
+    let forming = FormingModel::new(scenario).unwrap();
+    let result = run::run(&forming, None, None);
+    let state = result.outcome.as_ref().unwrap();
+    let x = &state.positions;
+    let shear = forming
+        .model
+        .elements
+        .iter()
+        .map(|e| (e.centroid(x), e.shear_angle(x).to_degrees()))
+        .collect();
+    (forming, shear)
+}
+
+/// Largest difference of shear angle between elements with the same final centroid (every
+/// element of `other` must find its twin in `reference` within 0.1 mm).
+fn largest_difference(reference: &[(Vector3<f64>, f64)], other: &[(Vector3<f64>, f64)]) -> f64 {
+    assert_eq!(reference.len(), other.len());
+    other
+        .iter()
+        .map(|(c, gamma)| {
+            let twin = reference
+                .iter()
+                .min_by(|a, b| (a.0 - c).norm().total_cmp(&(b.0 - c).norm()))
+                .unwrap();
+            assert!((twin.0 - c).norm() < 0.1, "no twin for the element at {c}");
+            (twin.1 - gamma).abs()
+        })
+        .fold(0.0, f64::max)
+}
+
+#[test]
+fn imported_blanks_and_tools_form_like_the_built_in_ones() {
+    let dir = scratch_dir("forming", "mesh-files");
+    let built_in = load(
+        &dir,
+        "built-in.toml",
+        &scenario_text(RECTANGLE, BUILT_IN_TOOLS),
+    );
+    let (reference_model, reference) = formed(&built_in);
+    let largest = reference.iter().map(|r| r.1.abs()).fold(0.0, f64::max);
+    println!("built-in: largest shear {largest:.2}°");
+    assert!(largest > 5.0, "too little shear to compare: {largest}°");
+
+    for file in ["hemisphere-blank-10mm.msh", "hemisphere-blank-10mm.inp"] {
+        let mesh = repo_path(&format!("tests/data/meshes/{file}"));
+        let blank = format!("mesh = {:?}", mesh);
+        let scenario = load(&dir, "mesh.toml", &scenario_text(&blank, BUILT_IN_TOOLS));
+        let (_, shear) = formed(&scenario);
+        let difference = largest_difference(&reference, &shear);
+        println!("{file}: largest difference {difference:.2e}°");
+        assert!(difference < 0.5, "{file}: {difference}°");
+    }
+
+    let mut tools = String::from("shape = \"files\"\nflange_radius = 47.0\n");
+    for (k, key) in ["punch", "die", "holder"].iter().enumerate() {
+        let path = dir.join(format!("{key}.stl"));
+        write_stl_ascii(&path, &reference_model.model.tools[k].surface, key).unwrap();
+        tools.push_str(&format!("{key} = {{ file = {:?} }}\n", path));
+    }
+    let scenario = load(&dir, "stl.toml", &scenario_text(RECTANGLE, &tools));
+    let (_, shear) = formed(&scenario);
+    let difference = largest_difference(&reference, &shear);
+    println!("STL tools: largest difference {difference:.2e}°");
+    assert!(difference < 0.5, "STL tools: {difference}°");
+}
