@@ -5,7 +5,8 @@
 //!
 //! The blank files are `tests/data/meshes/hemisphere-blank-10mm.{msh,inp}` (10 mm quadrilaterals,
 //! made by `make_hemisphere_blanks.py` there, with their own node and element numbering); the
-//! STL files are the built-in tool surfaces written by this test.
+//! STL files are the built-in tool surfaces written by this test. The built-in run's formed
+//! blank, exported for a structural analysis, is read back as well.
 
 mod common;
 
@@ -13,7 +14,10 @@ use common::{repo_path, scratch_dir};
 use nalgebra::Vector3;
 use std::path::Path;
 use thermostamp::contact::write_stl_ascii;
+use thermostamp::forming::export::{write_formed_blank, FORMED_INP};
 use thermostamp::forming::{run, FormingModel, Scenario};
+use thermostamp::mesh::abaqus::read_inp_with_thickness;
+use thermostamp::solver::State;
 
 /// The hemisphere example on 10 mm cells, 20 mm of stroke; `[blank]` and `[tools]` as given.
 fn scenario_text(blank: &str, tools: &str) -> String {
@@ -37,11 +41,18 @@ fn load(dir: &Path, name: &str, text: &str) -> Scenario {
     Scenario::load(&path, &[]).unwrap()
 }
 
-/// Runs the scenario; per element, its final centroid and shear angle (degrees).
-fn formed(scenario: &Scenario) -> (FormingModel, Vec<(Vector3<f64>, f64)>) {
+/// A forming run: the model, its final state, and per element the final centroid and shear
+/// angle (degrees).
+struct Formed {
+    forming: FormingModel,
+    state: State,
+    shear: Vec<(Vector3<f64>, f64)>,
+}
+
+fn formed(scenario: &Scenario) -> Formed {
     let forming = FormingModel::new(scenario).unwrap();
     let result = run::run(&forming, None, None);
-    let state = result.outcome.as_ref().unwrap();
+    let state = result.outcome.unwrap();
     let x = &state.positions;
     let shear = forming
         .model
@@ -49,7 +60,36 @@ fn formed(scenario: &Scenario) -> (FormingModel, Vec<(Vector3<f64>, f64)>) {
         .iter()
         .map(|e| (e.centroid(x), e.shear_angle(x).to_degrees()))
         .collect();
-    (forming, shear)
+    Formed {
+        forming,
+        state,
+        shear,
+    }
+}
+
+/// The formed blank written for the next analysis reads back as it was: nodes where the
+/// forming left them (bit for bit), each element's formed thickness, and its warp direction
+/// along the formed warp and in the element's plane.
+fn check_export(dir: &Path, run: &Formed) {
+    let model = &run.forming.model;
+    let files = write_formed_blank(dir, model, &run.state).unwrap();
+    assert!(files.iter().all(|f| f.exists()), "{files:?}");
+    let deck = read_inp_with_thickness(&dir.join(FORMED_INP)).unwrap();
+    let mesh = &deck.import.mesh;
+    assert_eq!(mesh.nodes, run.state.positions);
+    assert_eq!(mesh.triangles, model.mesh.triangles);
+    let warp = mesh.warp_directions.as_ref().unwrap();
+    for (k, e) in model.elements.iter().enumerate() {
+        assert_eq!(deck.thickness[k], Some(run.state.membrane[k].thickness));
+        let formed = (e.gradient(&run.state.positions) * e.fibres.warp.xy()).normalize();
+        assert!((warp[k].normalize() - formed).norm() < 1e-12, "element {k}");
+        let [a, b, c] = mesh.triangles[k].map(|n| mesh.nodes[n]);
+        let normal = (b - a).cross(&(c - a)).normalize();
+        assert!(
+            warp[k].dot(&normal).abs() < 1e-12,
+            "element {k}: warp off its plane"
+        );
+    }
 }
 
 /// Largest difference of shear angle between elements with the same final centroid (every
@@ -77,7 +117,9 @@ fn imported_blanks_and_tools_form_like_the_built_in_ones() {
         "built-in.toml",
         &scenario_text(RECTANGLE, BUILT_IN_TOOLS),
     );
-    let (reference_model, reference) = formed(&built_in);
+    let reference_run = formed(&built_in);
+    check_export(&dir, &reference_run);
+    let reference = &reference_run.shear;
     let largest = reference.iter().map(|r| r.1.abs()).fold(0.0, f64::max);
     println!("built-in: largest shear {largest:.2}°");
     assert!(largest > 5.0, "too little shear to compare: {largest}°");
@@ -86,8 +128,7 @@ fn imported_blanks_and_tools_form_like_the_built_in_ones() {
         let mesh = repo_path(&format!("tests/data/meshes/{file}"));
         let blank = format!("mesh = {:?}", mesh);
         let scenario = load(&dir, "mesh.toml", &scenario_text(&blank, BUILT_IN_TOOLS));
-        let (_, shear) = formed(&scenario);
-        let difference = largest_difference(&reference, &shear);
+        let difference = largest_difference(reference, &formed(&scenario).shear);
         println!("{file}: largest difference {difference:.2e}°");
         assert!(difference < 0.5, "{file}: {difference}°");
     }
@@ -95,12 +136,12 @@ fn imported_blanks_and_tools_form_like_the_built_in_ones() {
     let mut tools = String::from("shape = \"files\"\nflange_radius = 47.0\n");
     for (k, key) in ["punch", "die", "holder"].iter().enumerate() {
         let path = dir.join(format!("{key}.stl"));
-        write_stl_ascii(&path, &reference_model.model.tools[k].surface, key).unwrap();
+        let surface = &reference_run.forming.model.tools[k].surface;
+        write_stl_ascii(&path, surface, key).unwrap();
         tools.push_str(&format!("{key} = {{ file = {:?} }}\n", path));
     }
     let scenario = load(&dir, "stl.toml", &scenario_text(RECTANGLE, &tools));
-    let (_, shear) = formed(&scenario);
-    let difference = largest_difference(&reference, &shear);
+    let difference = largest_difference(reference, &formed(&scenario).shear);
     println!("STL tools: largest difference {difference:.2e}°");
     assert!(difference < 0.5, "STL tools: {difference}°");
 }

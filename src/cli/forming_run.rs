@@ -3,6 +3,7 @@
 
 use super::shared::{print_table, with_threads, Bar, ScenarioArgs};
 use crate::experiment::sheet_test::FrameOutput;
+use crate::forming::export::write_formed_blank;
 use crate::forming::run::shear_angles;
 use crate::forming::{run::FormingRun, FormingModel, FormingRecord, Scenario};
 use crate::io::plot::{write_map_png, write_png, LinePlot, LineStyle, MapPlot, Series};
@@ -53,6 +54,7 @@ fn forming(args: &Args) -> anyhow::Result<()> {
             state,
             scenario.output.locking_angle,
         )?);
+        files.extend(write_formed_blank(&dir, &forming.model, state)?);
     }
     if scenario.output.frames > 0 {
         files.push(dir.join("forming.pvd"));

@@ -1,7 +1,8 @@
 //! Thermo-stamping runs (MODEL.md §6): a scenario file, the model it describes (blank, card,
-//! tools), and the run with its histories.
+//! tools), the run with its histories, and the formed blank written for the next analysis.
 
 pub mod drape_preview;
+pub mod export;
 pub mod run;
 pub mod scenario;
 pub mod setup;

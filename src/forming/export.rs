@@ -1,0 +1,59 @@
+//! The formed blank for the next analysis: an Abaqus deck with the nodes where the forming left
+//! them, S3R elements, and per element the formed warp direction and the formed thickness
+//! (docs/meshes.md, "What the writer writes"), so that a structural model starts from the
+//! fibre angles and thicknesses of the part; and a `.vtu` of the final state with every field.
+
+use crate::io::sheet_frame::sheet_frame;
+use crate::io::vtk::{write_vtu, VtuFrame};
+use crate::mesh::abaqus::{write_inp, ElementOutput};
+use crate::mesh::Mesh;
+use crate::solver::{Model, State};
+use anyhow::Context;
+use std::path::{Path, PathBuf};
+
+/// Names of the files written, in the output folder.
+pub const FORMED_INP: &str = "formed-blank.inp";
+pub const FORMED_VTU: &str = "formed-blank.vtu";
+
+/// The blank at `state`: the reference mesh's triangles and sets on the current positions,
+/// and per triangle the current warp `F a0 / |F a0|` and thickness.
+pub fn formed_blank(model: &Model, state: &State) -> (Mesh, ElementOutput) {
+    let mesh = Mesh {
+        nodes: state.positions.clone(),
+        triangles: model.mesh.triangles.clone(),
+        node_sets: model.mesh.node_sets.clone(),
+        element_sets: model.mesh.element_sets.clone(),
+        warp_directions: None,
+    };
+    let warp = model
+        .elements
+        .iter()
+        .map(|e| (e.gradient(&state.positions) * e.fibres.warp.xy()).normalize())
+        .collect();
+    let thickness = state.membrane.iter().map(|m| m.thickness).collect();
+    (mesh, ElementOutput { warp, thickness })
+}
+
+/// Writes [`FORMED_INP`] and [`FORMED_VTU`] into `dir`; returns their paths.
+pub fn write_formed_blank(
+    dir: &Path,
+    model: &Model,
+    state: &State,
+) -> anyhow::Result<Vec<PathBuf>> {
+    let (mesh, elements) = formed_blank(model, state);
+    let inp = dir.join(FORMED_INP);
+    write_inp(&inp, &mesh, Some(&elements))?;
+    let frame = sheet_frame(model, state)?;
+    let vtu = dir.join(FORMED_VTU);
+    write_vtu(
+        &vtu,
+        &VtuFrame {
+            points: &frame.points,
+            triangles: &model.mesh.triangles,
+            point_data: &frame.point_data,
+            cell_data: &frame.cell_data,
+        },
+    )
+    .with_context(|| format!("cannot write {}", vtu.display()))?;
+    Ok(vec![inp, vtu])
+}
