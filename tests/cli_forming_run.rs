@@ -47,6 +47,8 @@ fn hemisphere_example_runs_in_reduced_form() {
         "forming-punch-force.png",
         "forming.pvd",
         "forming_0002.vtu",
+        "formed-blank.inp",
+        "formed-blank.vtu",
     ] {
         assert!(dir.join(file).exists(), "{file} missing");
     }

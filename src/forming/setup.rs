@@ -17,6 +17,7 @@ use crate::mesh::orientation::{describe_poor_projections, poor_projections, refe
 use crate::mesh::{read_mesh_file, rectangle, Mesh};
 use crate::solver::{Constraint, Model, Motion, SolverSettings};
 use nalgebra::Vector3;
+use std::collections::BTreeMap;
 use std::path::Path;
 use std::sync::Arc;
 
@@ -249,24 +250,42 @@ fn check_built_in_fit(
     Ok(())
 }
 
-/// One constraint per `[[boundary]]`: the nodes of its set held along its axes.
+/// The `[[boundary]]` sets as constraints: each node held along every axis that a boundary
+/// containing it names. A node in several sets (the corner of two symmetry planes) is held
+/// along all their axes, in one constraint named after them ("symmetry_x+symmetry_y").
 fn boundary_constraints(s: &Scenario, mesh: &Mesh) -> Result<Vec<Constraint>, String> {
-    s.boundary
-        .iter()
-        .map(|b| {
-            let (name, kind) = b.set().map_err(|e| format!("{}: {e}", s.origin))?;
-            let nodes = match kind {
-                SetKind::Node => mesh.node_set(name).map(<[usize]>::to_vec),
-                SetKind::Element => mesh.nodes_of_element_set(name),
+    let mut held: BTreeMap<usize, ([bool; 3], Vec<&str>)> = BTreeMap::new();
+    for b in &s.boundary {
+        let (name, kind) = b.set().map_err(|e| format!("{}: {e}", s.origin))?;
+        let mask = b.mask().map_err(|e| format!("{}: {e}", s.origin))?;
+        let nodes = match kind {
+            SetKind::Node => mesh.node_set(name).map(<[usize]>::to_vec),
+            SetKind::Element => mesh.nodes_of_element_set(name),
+        }
+        .map_err(|e| format!("{}: boundary: {e}", s.origin))?;
+        for n in nodes {
+            let entry = held.entry(n).or_insert(([false; 3], Vec::new()));
+            entry.0 = std::array::from_fn(|k| entry.0[k] || mask[k]);
+            if !entry.1.contains(&name) {
+                entry.1.push(name);
             }
-            .map_err(|e| format!("{}: boundary: {e}", s.origin))?;
-            Ok(Constraint {
-                name: name.to_string(),
-                nodes,
-                motion: Motion::Components(b.mask().map_err(|e| format!("{}: {e}", s.origin))?),
-            })
+        }
+    }
+    let mut groups: BTreeMap<(String, [bool; 3]), Vec<usize>> = BTreeMap::new();
+    for (node, (mask, names)) in held {
+        groups
+            .entry((names.join("+"), mask))
+            .or_default()
+            .push(node);
+    }
+    Ok(groups
+        .into_iter()
+        .map(|((name, mask), nodes)| Constraint {
+            name,
+            nodes,
+            motion: Motion::Components(mask),
         })
-        .collect()
+        .collect())
 }
 
 /// The tools and the holder's index among them (punch and die are 0 and 1).
