@@ -10,7 +10,7 @@
 
 mod common;
 
-use common::{repo_path, scratch_dir};
+use common::{element_shear, largest_twin_difference, repo_path, scratch_dir};
 use nalgebra::Vector3;
 use std::path::Path;
 use thermostamp::contact::write_stl_ascii;
@@ -53,13 +53,7 @@ fn formed(scenario: &Scenario) -> Formed {
     let forming = FormingModel::new(scenario).unwrap();
     let result = run::run(&forming, None, None);
     let state = result.outcome.unwrap();
-    let x = &state.positions;
-    let shear = forming
-        .model
-        .elements
-        .iter()
-        .map(|e| (e.centroid(x), e.shear_angle(x).to_degrees()))
-        .collect();
+    let shear = element_shear(&forming.model, &state.positions);
     Formed {
         forming,
         state,
@@ -96,17 +90,7 @@ fn check_export(dir: &Path, run: &Formed) {
 /// element of `other` must find its twin in `reference` within 0.1 mm).
 fn largest_difference(reference: &[(Vector3<f64>, f64)], other: &[(Vector3<f64>, f64)]) -> f64 {
     assert_eq!(reference.len(), other.len());
-    other
-        .iter()
-        .map(|(c, gamma)| {
-            let twin = reference
-                .iter()
-                .min_by(|a, b| (a.0 - c).norm().total_cmp(&(b.0 - c).norm()))
-                .unwrap();
-            assert!((twin.0 - c).norm() < 0.1, "no twin for the element at {c}");
-            (twin.1 - gamma).abs()
-        })
-        .fold(0.0, f64::max)
+    largest_twin_difference(reference, other, 0.1)
 }
 
 #[test]

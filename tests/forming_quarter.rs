@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::repo_path;
+use common::{element_shear, largest_twin_difference, repo_path};
 use nalgebra::Vector3;
 use thermostamp::forming::{run, FormingModel, Scenario};
 
@@ -24,13 +24,7 @@ fn formed(example: &str, overrides: &[&str]) -> (f64, Vec<(Vector3<f64>, f64)>) 
         .iter()
         .map(|r| r.punch_force)
         .fold(0.0, f64::max);
-    let shear = forming
-        .model
-        .elements
-        .iter()
-        .map(|e| (e.centroid(x), e.shear_angle(x).to_degrees()))
-        .collect();
-    (peak, shear)
+    (peak, element_shear(&forming.model, x))
 }
 
 #[test]
@@ -38,15 +32,7 @@ fn the_quarter_model_forms_as_a_quarter_of_the_whole() {
     let (full_force, full) = formed("examples/hemisphere.toml", &[STROKE]);
     let (quarter_force, quarter) = formed("examples/hemisphere-quarter.toml", &[STROKE]);
     assert_eq!(4 * quarter.len(), full.len());
-    let mut worst: f64 = 0.0;
-    for (c, gamma) in &quarter {
-        let twin = full
-            .iter()
-            .min_by(|a, b| (a.0 - c).norm().total_cmp(&(b.0 - c).norm()))
-            .unwrap();
-        assert!((twin.0 - c).norm() < 0.5, "no twin for the element at {c}");
-        worst = worst.max((twin.1 - gamma).abs());
-    }
+    let worst = largest_twin_difference(&full, &quarter, 0.5);
     let largest = quarter.iter().map(|q| q.1.abs()).fold(0.0, f64::max);
     let force_error = (4.0 * quarter_force - full_force).abs() / full_force;
     println!(

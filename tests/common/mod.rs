@@ -130,3 +130,38 @@ pub fn run_ok(args: &[&str]) -> String {
     );
     String::from_utf8(out.stdout).unwrap()
 }
+
+/// Per element of `model`: its centroid and shear angle (degrees) at the positions `x`.
+pub fn element_shear(
+    model: &thermostamp::solver::Model,
+    x: &[Vector3<f64>],
+) -> Vec<(Vector3<f64>, f64)> {
+    model
+        .elements
+        .iter()
+        .map(|e| (e.centroid(x), e.shear_angle(x).to_degrees()))
+        .collect()
+}
+
+/// Largest difference of shear angle between each element of `other` and its twin in
+/// `reference`, the element whose centroid is nearest (which must lie within `reach` mm).
+pub fn largest_twin_difference(
+    reference: &[(Vector3<f64>, f64)],
+    other: &[(Vector3<f64>, f64)],
+    reach: f64,
+) -> f64 {
+    other
+        .iter()
+        .map(|(c, gamma)| {
+            let twin = reference
+                .iter()
+                .min_by(|a, b| (a.0 - c).norm().total_cmp(&(b.0 - c).norm()))
+                .expect("a reference element");
+            assert!(
+                (twin.0 - c).norm() < reach,
+                "no twin for the element at {c}"
+            );
+            (twin.1 - gamma).abs()
+        })
+        .fold(0.0, f64::max)
+}
