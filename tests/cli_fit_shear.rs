@@ -1,6 +1,7 @@
 //! `thermostamp fit shear` run as a user runs it: a synthetic bias-extension curve gives back
 //! its coefficients in a card that loads and keeps every other line, a PNG is written, and bad
-//! input gives a one-line error with exit code 2 naming the file (and line).
+//! input gives a one-line error with exit code 2 naming the file (and line); `--refine-fe` on a
+//! virtual bias-extension test; the shipped Twintex card is what the tutorial's command writes.
 
 mod common;
 
@@ -274,4 +275,34 @@ fn refine_fe_fits_the_virtual_bias_extension_test() {
         ],
         &["--refine-fe", "bias-extension"],
     );
+}
+
+/// The command that made the shipped Twintex card (README, `examples/fit-shear/README.md`),
+/// run on the benchmark curve as the tutorial gives it, writes that card again byte for byte:
+/// same coefficients, same provenance comments.
+#[test]
+fn shipped_twintex_card_is_the_fit_of_the_benchmark_curve() {
+    let dir = scratch_dir("fit-shear", "twintex");
+    let output = dir.join("twintex.toml");
+    let plot = dir.join("fit.png");
+    let stdout = common::run_ok(&[
+        "fit",
+        "shear",
+        "--data",
+        "examples/fit-shear/bias_extension_glass_pp_plain_150x450.csv",
+        "--width",
+        "150",
+        "--length",
+        "450",
+        "--card",
+        "materials/twintex-plain-weave.toml",
+        "--output",
+        output.to_str().unwrap(),
+        "--plot",
+        plot.to_str().unwrap(),
+    ]);
+    assert!(stdout.contains("points: 54"), "{stdout}");
+    let shipped = std::fs::read_to_string(repo_path("materials/twintex-plain-weave.toml")).unwrap();
+    assert_eq!(std::fs::read_to_string(&output).unwrap(), shipped);
+    assert!(std::fs::metadata(&plot).unwrap().len() > 1000);
 }

@@ -260,15 +260,11 @@ fn refine(
              best coefficients found are kept"
         );
     }
-    println!("{:>4}  {:>24}", "k", "refined c_k (MPa)");
-    for (k, (c, e)) in refined
-        .coefficients
-        .iter()
-        .zip(&refined.standard_errors)
-        .enumerate()
-    {
-        println!("{:>4}  {:>24}", k + 1, format!("{c:.4e} ± {e:.2e}"));
-    }
+    print_coefficients(
+        "refined c_k (MPa)",
+        &refined.coefficients,
+        &refined.standard_errors,
+    );
     Ok(refined)
 }
 
@@ -456,17 +452,20 @@ fn shear_provenance(args: &ShearArgs, fit: &ShearFit, matrix: Option<&MatrixShar
     lines
 }
 
-fn print_shear_table(fit: &ShearFit, matrix: Option<&MatrixShare>) {
-    println!("{:>4}  {:>24}", "k", "c_k (MPa)");
-    for (k, (c, e)) in fit
-        .result
-        .parameters
-        .iter()
-        .zip(&fit.result.standard_errors)
-        .enumerate()
-    {
+/// The shear coefficients with their standard errors, one row each under `header`.
+fn print_coefficients(header: &str, coefficients: &[f64], standard_errors: &[f64]) {
+    println!("{:>4}  {:>24}", "k", header);
+    for (k, (c, e)) in coefficients.iter().zip(standard_errors).enumerate() {
         println!("{:>4}  {:>24}", k + 1, format!("{c:.4e} ± {e:.2e}"));
     }
+}
+
+fn print_shear_table(fit: &ShearFit, matrix: Option<&MatrixShare>) {
+    print_coefficients(
+        "c_k (MPa)",
+        &fit.result.parameters,
+        &fit.result.standard_errors,
+    );
     println!(
         "points: {}; RMS residual: {:.3e} N/mm ({:.3} relative)",
         fit.points.len(),

@@ -50,8 +50,9 @@ pub enum FitError {
 }
 
 /// Columns of a Jacobian whose scaled condition number exceeds this are taken as dependent:
-/// well past what double precision can resolve in `(J^T J)^-1`.
-const MAX_CONDITION: f64 = 1e10;
+/// well past what double precision can resolve in `(J^T J)^-1`. The FE refinement's surrogate
+/// Jacobian (`shear_fe`) is held to the same bound.
+pub(crate) const MAX_CONDITION: f64 = 1e10;
 
 /// Fits `problem` starting from `initial` with Levenberg–Marquardt.
 pub fn fit<R: Residuals>(problem: &R, initial: &[f64]) -> Result<FitResult, FitError> {

@@ -207,9 +207,12 @@ pub fn shear_angle(test: &ShearTest, d: f64) -> f64 {
     }
 }
 
-/// `d F_sh / d c_k = 2 t sin(g) k sin^(2(k-1))(g)`: the model `F_sh = 2 t sin(g) W_s'(sin^2 g)`
-/// of MODEL.md §5 is linear in the coefficients.
-fn basis(thickness: f64, gamma: f64, k: usize) -> f64 {
+/// `d F_sh / d c_k = 2 t sin(g) k sin^(2(k-1))(g)` at shear angle `g` (radians) for fabric
+/// layers of total thickness `t` (mm), `k` from 1: the model `F_sh = 2 t sin(g) W_s'(sin^2 g)`
+/// of MODEL.md §5 is linear in the coefficients, so `F_sh = sum_k c_k basis(t, g, k)`. The
+/// analytic fit's Jacobian here, and through Cao's forward model the surrogate Jacobian of the
+/// FE refinement (`shear_fe`).
+pub(crate) fn basis(thickness: f64, gamma: f64, k: usize) -> f64 {
     let s = gamma.sin();
     2.0 * thickness * s * k as f64 * (s * s).powi(k as i32 - 1)
 }

@@ -27,12 +27,14 @@
 //! the deformation differs, so they are near: on an FE-made curve the error shrinks about
 //! tenfold per iteration (`tests/fit_shear_fe.rs`).
 
-use super::shear::{ForceCurve, RELATIVE_FLOOR};
+use super::least_squares::MAX_CONDITION;
+use super::shear::{basis, ForceCurve, RELATIVE_FLOOR};
 use crate::experiment::bias_extension::BiasExtension;
 use crate::experiment::kinematics::{
     bias_extension_displacement, bias_extension_force, bias_extension_shear_angle,
 };
 use crate::experiment::sheet_test::{SheetTest, TestProcess};
+use crate::material::card::SHEAR_CHECK_LIMIT_DEG;
 use crate::material::fabric::ShearInteraction;
 use crate::material::{Laminate, Layer, MaterialCard, MaterialLaw, WovenFabric};
 use crate::mesh::DiagonalPattern;
@@ -52,13 +54,6 @@ pub const DEFAULT_CELLS_ACROSS_WIDTH: f64 = 6.0;
 /// twice the bound `tests/fit_shear_benchmark.rs` asks of the shipped card's run (0.026 there),
 /// so that a softer trial law of the line search does not end the refinement.
 pub const DEFAULT_MAX_KINETIC_RATIO: f64 = 0.1;
-/// Largest shear angle at which a trial law must keep a non-decreasing shear energy (degrees),
-/// the same range the material card checks (`material::card`), so that a refined law can be
-/// written to a card that loads.
-const SHEAR_CHECK_LIMIT_DEG: u32 = 75;
-/// A surrogate Jacobian whose column-scaled condition number exceeds this cannot tell the
-/// coefficients apart (the same bound as `least_squares`).
-const MAX_CONDITION: f64 = 1e10;
 
 /// How the FE bias-extension test inside the loop is run (MODEL.md §5, §6).
 #[derive(Clone, Debug, PartialEq)]
@@ -357,13 +352,6 @@ pub enum ShearFeError {
     },
 }
 
-/// `d F_sh / d c_k = 2 t sin(g) k sin^(2(k-1))(g)` (MODEL.md §5, last bullet): the normalised
-/// shear force is linear in the coefficients.
-fn shear_basis(thickness: f64, gamma: f64, k: usize) -> f64 {
-    let s = gamma.sin();
-    2.0 * thickness * s * k as f64 * (s * s).powi(k as i32 - 1)
-}
-
 /// The analytic forward model: the bias-extension force (N) at crosshead displacement `d` of a
 /// pin-jointed specimen whose fabric layers (total thickness `thickness`) follow `c`, by the
 /// energy balance of Cao et al. 2008 (MODEL.md §5).
@@ -376,7 +364,7 @@ pub fn analytic_force(width: f64, length: f64, thickness: f64, c: &[f64], d: f64
 }
 
 /// `dF_an(d_i)/dc_k` (N/MPa), `displacement.len() x terms`: the forward model with `F_sh`
-/// replaced by the k-th basis function, exact as the model is linear in `c`.
+/// replaced by the k-th basis function (`shear::basis`), exact as the model is linear in `c`.
 pub fn surrogate_jacobian(
     width: f64,
     length: f64,
@@ -386,7 +374,7 @@ pub fn surrogate_jacobian(
 ) -> DMatrix<f64> {
     DMatrix::from_fn(displacement.len(), terms, |i, j| {
         let gamma = bias_extension_shear_angle(width, length, displacement[i]);
-        bias_extension_force(width, length, gamma, |g| shear_basis(thickness, g, j + 1))
+        bias_extension_force(width, length, gamma, |g| basis(thickness, g, j + 1))
     })
 }
 

@@ -53,23 +53,11 @@ pub fn parse_strip_curve(
     let data = parse_xy_curve(text, origin, &LAYOUT)?;
     let x_name = data.x_name;
     let divisor = force_divisor(data.y_name, width, origin)?;
-    let mut curve = StripCurve {
+    let curve = StripCurve {
         origin: origin.to_string(),
-        stretch: Vec::with_capacity(data.x.len()),
-        force_per_width: Vec::with_capacity(data.x.len()),
+        stretch: data.stretch(origin)?,
+        force_per_width: data.y.iter().map(|y| y / divisor).collect(),
     };
-    for ((&x, &y), &line) in data.x.iter().zip(&data.y).zip(&data.lines) {
-        let stretch = if x_name == "strain" { 1.0 + x } else { x };
-        if stretch <= 0.0 {
-            return Err(InputError::at_line(
-                origin,
-                line,
-                format!("{x_name} = {x}: the stretch must be positive"),
-            ));
-        }
-        curve.stretch.push(stretch);
-        curve.force_per_width.push(y / divisor);
-    }
     if curve.tensile_points().is_empty() {
         return Err(InputError::in_file(
             origin,

@@ -145,32 +145,20 @@ pub fn parse_curve(
     strain_rate: f64,
 ) -> Result<TensionCurve, InputError> {
     let data = parse_xy_curve(text, origin, &LAYOUT)?;
-    let mut curve = TensionCurve {
+    let stretch = data.stretch(origin)?;
+    // Incompressible: the section shrinks as 1/lambda, so sigma = lambda P.
+    let stress = if data.y_name == "nominal_stress" {
+        stretch.iter().zip(&data.y).map(|(l, p)| l * p).collect()
+    } else {
+        data.y
+    };
+    Ok(TensionCurve {
         origin: origin.to_string(),
         temperature,
         strain_rate,
-        stretch: Vec::with_capacity(data.x.len()),
-        stress: Vec::with_capacity(data.x.len()),
-    };
-    for ((&x, &y), &line) in data.x.iter().zip(&data.y).zip(&data.lines) {
-        let stretch = if data.x_name == "strain" { 1.0 + x } else { x };
-        if stretch <= 0.0 {
-            return Err(InputError::at_line(
-                origin,
-                line,
-                format!("{} = {x}: the stretch must be positive", data.x_name),
-            ));
-        }
-        // Incompressible: the section shrinks as 1/lambda, so sigma = lambda P.
-        let stress = if data.y_name == "nominal_stress" {
-            stretch * y
-        } else {
-            y
-        };
-        curve.stretch.push(stretch);
-        curve.stress.push(stress);
-    }
-    Ok(curve)
+        stretch,
+        stress,
+    })
 }
 
 #[cfg(test)]

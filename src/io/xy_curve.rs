@@ -36,6 +36,30 @@ pub struct XyCurve {
     pub y: Vec<f64>,
 }
 
+impl XyCurve {
+    /// The `x` column as stretch for the tension curves: `1 + x` when the column is the
+    /// engineering `strain`, `x` itself when it is the `stretch`. A stretch that is not positive
+    /// is an error at its line of `origin`.
+    pub fn stretch(&self, origin: &str) -> Result<Vec<f64>, InputError> {
+        self.x
+            .iter()
+            .zip(&self.lines)
+            .map(|(&x, &line)| {
+                let stretch = if self.x_name == "strain" { 1.0 + x } else { x };
+                if stretch > 0.0 {
+                    Ok(stretch)
+                } else {
+                    Err(InputError::at_line(
+                        origin,
+                        line,
+                        format!("{} = {x}: the stretch must be positive", self.x_name),
+                    ))
+                }
+            })
+            .collect()
+    }
+}
+
 /// The text of the curve file at `path`, with the name that messages give it.
 pub fn read_curve_text(path: &Path) -> Result<(String, String), InputError> {
     let origin = path.display().to_string();

@@ -96,8 +96,10 @@ fn default_compression_fraction() -> f64 {
     1e-3
 }
 
-/// Largest shear angle at which the shear energy must still be non-decreasing (degrees).
-const SHEAR_CHECK_LIMIT_DEG: f64 = 75.0;
+/// Largest shear angle at which the shear energy must still be non-decreasing (degrees): a card
+/// is checked at every whole degree up to it, and so is every trial law of the FE refinement
+/// (`fit::shear_fe`), so that a refined law can be written to a card that loads.
+pub(crate) const SHEAR_CHECK_LIMIT_DEG: u32 = 75;
 /// Yarn strain up to which the tension must stay non-negative.
 const TENSION_CHECK_STRAIN: f64 = 0.05;
 
@@ -264,7 +266,7 @@ impl FabricSection {
         }
         let shear = ShearInteraction::new(self.shear);
         // A falling shear energy would be a negative shear stiffness: unstable in any solver.
-        for deg in (0..=SHEAR_CHECK_LIMIT_DEG as u32).map(f64::from) {
+        for deg in (0..=SHEAR_CHECK_LIMIT_DEG).map(f64::from) {
             let i10 = deg.to_radians().sin().powi(2);
             if shear.derivative(i10) < 0.0 {
                 return Err(format!(
