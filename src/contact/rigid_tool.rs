@@ -190,7 +190,7 @@ impl RigidTool {
 }
 
 /// How far (mm) a node may move relative to a tool before its list of near triangles is made
-/// again: the search radius itself **[choice]**. A larger margin lists more triangles, a smaller
+/// again: the search radius itself **(choice)**. A larger margin lists more triangles, a smaller
 /// one lists them more often; both are cheap next to a grid lookup every step.
 fn list_margin(search_radius: f64) -> f64 {
     search_radius

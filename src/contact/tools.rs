@@ -22,7 +22,7 @@
 //! neighbouring rings are stitched into triangles by walking both rings in angle order, so rings
 //! may have different numbers of vertices (the number follows the ring's circumference). The
 //! target edge length is `resolution` (mm), both along the profile and around the rings, with two
-//! [choice]s to keep coarse meshes round: a circular arc is cut into steps of at most 15°, and a
+//! (choice)s to keep coarse meshes round: a circular arc is cut into steps of at most 15°, and a
 //! full ring has at least 12 segments.
 //!
 //! Every vertex lies exactly (to rounding) on the analytic surface, so the faceting error in
@@ -47,7 +47,7 @@ const RING_PERIOD: f64 = 4.0;
 /// Hemispherical punch of radius `radius` with a vertical cylindrical skirt of height `radius`
 /// below the equator, so the punch reaches from `z = -2 radius` up to its apex at the origin.
 ///
-/// The skirt height is a [choice]: a stroke deeper than the punch radius draws the blank along
+/// The skirt height is a (choice): a stroke deeper than the punch radius draws the blank along
 /// the cylinder, and a skirt as tall as the radius covers any stroke a hemispherical die allows.
 /// Use [`hemisphere_punch_with_skirt`] for another height.
 pub fn hemisphere_punch(radius: f64, resolution: f64) -> Result<TriangleSurface, String> {
@@ -214,7 +214,7 @@ fn stadium_holder(
     sweep(tool, &profile.points, half_length, resolution)
 }
 
-/// Double-dome punch, a [choice] simplifying the woven-composites "double dome" benchmark to a
+/// Double-dome punch, a (choice) simplifying the woven-composites "double dome" benchmark to a
 /// smooth shape of double curvature: the hemisphere punch stretched along `x`. Its crown is the
 /// set of points at distance `radius` above the ridge segment `|x| <= half_length`, `y = 0`,
 /// `z = -radius`: a half cylinder of radius `radius` along `x` in the middle, closed by two

@@ -8,7 +8,7 @@
 //! `kappa = (w_XX, w_YY, w_XY) = G w`, `G` fixed by the reference geometry. The six nodes are
 //! the triangle's corners and the three nodes of its 1-ring (the nodes of the triangles that
 //! touch it) that interpolate best: the largest smallest singular value of the interpolation
-//! matrix, over the ring's nearest eight nodes **[choice]**. The classical choice, the corners
+//! matrix, over the ring's nearest eight nodes **(choice)**. The classical choice, the corners
 //! opposite its edges, fails on crossed cells: five of those six points lie on the two cell
 //! diagonals. Any quadratic surface is reproduced exactly, on the boundary too, where the
 //! choice is one-sided.
@@ -26,7 +26,7 @@
 //! `W = 1/2 (B_warp k_aa^2 + B_weft k_bb^2 + 2 B_twist k_ab^2)`, `k = kappa - kappa0`,
 //!
 //! with `kappa0` the curvature of the reference mesh and `B_twist = (B_warp + B_weft) / 2`
-//! **[choice]** (an isotropic card is then the plate without Poisson coupling). `B` is a
+//! **(choice)** (an isotropic card is then the plate without Poisson coupling). `B` is a
 //! bending rigidity per unit width (N·mm), as measured by cantilever (Peirce) tests; for
 //! prepregs it is far below `E t^3 / 12` because the yarns slide in the molten matrix.
 //! Forces are `dW/dx` of the patch nodes, including the turn of the triangle's normal.

@@ -108,7 +108,7 @@ fn arm_directions(theta: f64) -> (Vector3<f64>, Vector3<f64>) {
 }
 
 impl PictureFrame {
-    /// A 150 mm frame **[choice]**: the order of size of the frames used for woven-fabric
+    /// A 150 mm frame **(choice)**: the order of size of the frames used for woven-fabric
     /// shear characterisation (not a value from a standard or from the paper), pulled 60 mm
     /// (40° of shear) at 20 mm/min, the crosshead speed of the bias-extension benchmark. Run
     /// 300 times faster with eta1 divided by 300 (MODEL.md §6), on 37.5 mm crossed cells (the

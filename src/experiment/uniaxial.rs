@@ -49,7 +49,7 @@ pub struct UniaxialRow {
 pub type UniaxialRun = SheetTestRun<UniaxialRow>;
 
 impl UniaxialTension {
-    /// A typical laboratory strip **[choice]**: 25 mm wide with 150 mm between the grips (the
+    /// A typical laboratory strip **(choice)**: 25 mm wide with 150 mm between the grips (the
     /// proportions of tensile strips of woven composites), warp along the pull, pulled 3 mm
     /// (2 % strain: the crimp is out of a carbon weave and its yarns are near their failure
     /// strain) at 20 mm/min, the crosshead speed of the bias-extension benchmark. Run 300 times

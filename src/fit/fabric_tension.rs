@@ -8,7 +8,7 @@
 //! `N(lambda) = t_B dW_t/dlambda = t_B sum_{k=2..n} A_k (lambda - 1)^(k-1)`.
 //!
 //! Choices:
-//! - The matrix layers' share of the strip force is neglected **[choice]**. Their in-plane
+//! - The matrix layers' share of the strip force is neglected **(choice)**. Their in-plane
 //!   stress in a strip with no lateral strain is `2 C10 (lambda^2 - lambda^-2)`, about
 //!   `8 C10 eps`: with the shipped T300/PPS card's largest `C10 = 0.2 MPa` and its two 0.04 mm
 //!   skins, 0.0026 N/mm at 2 % strain against 368 N/mm from the yarns (7e-6 of the force; the

@@ -269,7 +269,7 @@ fn check_physical(c10: f64, c10_se: f64, eta1: &Eta1) -> Result<(), String> {
 /// All points at one temperature: stretch, rate and measured true stress, and the weight
 /// each residual is divided by.
 ///
-/// Residuals are relative, `(model - data) / max(|data|, floor)` **[choice]**: tensile-test
+/// Residuals are relative, `(model - data) / max(|data|, floor)` **(choice)**: tensile-test
 /// noise grows with the load (a load cell's error is a share of its reading), and equal
 /// weights would let the fast, high-stress curves decide the fit and make the standard errors
 /// too small (unweighted, 84 % of fits over 50 seeds of 2 % relative noise fell within two

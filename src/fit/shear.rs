@@ -221,7 +221,7 @@ pub(crate) fn basis(thickness: f64, gamma: f64, k: usize) -> f64 {
 /// relative.
 pub const RELATIVE_FLOOR: f64 = 0.05;
 
-/// Residuals `(F_model - F_data) / max(|F_data|, floor)` **[choice]**, as in `fit matrix`:
+/// Residuals `(F_model - F_data) / max(|F_data|, floor)` **(choice)**, as in `fit matrix`:
 /// load-cell noise is a share of the reading, and equal weights would let the few points near
 /// locking decide the whole curve. The floor, 5 % of the largest fitted `F_sh`, is wider than
 /// the matrix fit's 1 %: bias-extension forces at a few degrees are a few per cent of the

@@ -436,7 +436,7 @@ struct DataPoints {
     lines: Vec<usize>,
     displacement: Vec<f64>,
     force: Vec<f64>,
-    /// `max(F_data, floor x largest F_data)` **[choice]**, by default as `fit shear` weighs
+    /// `max(F_data, floor x largest F_data)` **(choice)**, by default as `fit shear` weighs
     /// `F_sh`: load-cell noise is a share of the reading, and the first millimetres (a few
     /// tenths of a newton, partly preload) must not decide the whole curve.
     scale: Vec<f64>,

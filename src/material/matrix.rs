@@ -229,7 +229,7 @@ impl MaterialLaw for ViscoHyperelasticMatrix {
         Ok(elastic_stress_33(&p, &point.c, &inv) + viscous)
     }
 
-    /// The stress of seed Eqs. (8)–(9) with [`elastic_tangent_33`] plus the viscous part of
+    /// The stress of seed Eqs. (8)–(9) with `elastic_tangent_33` plus the viscous part of
     /// the tangent, seed Eq. (9): `dS33/dC33 = 2 eta1 Cdot33` (through `I1`) and
     /// `dS33/dCdot33 = 2 eta1 (I1 - 3)`; the invariants and parameters are shared.
     fn stress_with_through_thickness_tangent(

@@ -175,7 +175,7 @@ pub trait MaterialLaw: Debug + Send + Sync {
 }
 
 /// `dS33/dC33` (MPa) and `dS33/dCdot33` (MPa·s) at a point, see
-/// [`MaterialLaw::through_thickness_tangent`].
+/// [`MaterialLaw::stress_with_through_thickness_tangent`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ThroughThicknessTangent {
     pub wrt_c33: f64,

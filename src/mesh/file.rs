@@ -68,7 +68,7 @@ const EQUAL_DIAGONALS: f64 = 1e-9;
 
 /// The two triangles of the quadrilateral `quad` (corners in order round it), split along its
 /// shorter diagonal, both keeping the quadrilateral's orientation; equal diagonals (within
-/// [`EQUAL_DIAGONALS`]) from the first corner. **Choice:** the shorter diagonal gives the
+/// `EQUAL_DIAGONALS`) from the first corner. **Choice:** the shorter diagonal gives the
 /// better-shaped pair; the solver's elements are triangles (see docs/meshes.md).
 pub fn split_quadrilateral(nodes: &[nalgebra::Vector3<f64>], quad: [usize; 4]) -> [[usize; 3]; 2] {
     let [a, b, c, d] = quad;

@@ -7,7 +7,7 @@ use super::Mesh;
 use nalgebra::{Rotation3, Vector3};
 
 /// A projection is called poor when the reference direction lies more than this many degrees
-/// out of the triangle's plane **[choice]**: its in-plane part is then shorter than half of it,
+/// out of the triangle's plane **(choice)**: its in-plane part is then shorter than half of it,
 /// and a small error in the direction or the surface turns the projected warp by as much
 /// again. At 90° the projection has no direction at all and the model refuses the triangle.
 pub const POOR_PROJECTION_DEG: f64 = 60.0;
