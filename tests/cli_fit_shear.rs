@@ -228,16 +228,9 @@ fn refine_fe_fits_the_virtual_bias_extension_test() {
     ]);
     println!("{stdout}");
     assert!(stdout.contains("refined c_k"), "{stdout}");
-    let error = |law: &ShearInteraction| {
-        let truth = ShearInteraction::new(vec![0.1, 0.0, 0.5]);
-        (1..=9)
-            .map(|k| f64::from(5 * k).to_radians())
-            .map(|g| {
-                let t = truth.normalised_shear_force(0.3, g);
-                (law.normalised_shear_force(0.3, g) - t).abs() / t
-            })
-            .fold(0.0, f64::max)
-    };
+    let truth = ShearInteraction::new(vec![0.1, 0.0, 0.5]);
+    let error =
+        |law: &ShearInteraction| common::shear_law_error(law, &truth, 0.3, (1..=9).map(|k| 5 * k));
     let refined = MaterialCard::load(&output).unwrap();
     let refined_error = error(&refined.fabric.shear);
     let analytic: Vec<f64> = stdout

@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::repo_path;
+use common::{repo_path, shear_law_error};
 use thermostamp::experiment::kinematics::{
     bias_extension_displacement, bias_extension_shear_angle,
 };
@@ -52,13 +52,7 @@ fn shear_force_error(c: &[f64], truth: &[f64], thickness: f64, max_deg: u32) -> 
         ShearInteraction::new(c.to_vec()),
         ShearInteraction::new(truth.to_vec()),
     );
-    (1..=max_deg / 5)
-        .map(|k| f64::from(5 * k).to_radians())
-        .map(|g| {
-            let t = b.normalised_shear_force(thickness, g);
-            (a.normalised_shear_force(thickness, g) - t).abs() / t
-        })
-        .fold(0.0, f64::max)
+    shear_law_error(&a, &b, thickness, (1..=max_deg / 5).map(|k| 5 * k))
 }
 
 /// `dF_an/dc_k` equals central differences of the analytic forward model.

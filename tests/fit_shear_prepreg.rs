@@ -10,7 +10,7 @@
 
 mod common;
 
-use common::{repo_path, run_ok, scratch_dir};
+use common::{repo_path, run_ok, scratch_dir, shear_law_error};
 use thermostamp::experiment::picture_frame::PictureFrame;
 use thermostamp::experiment::sheet_test::SheetTest;
 use thermostamp::fit::shear::{fit_shear, ForceCurve, ShearTest};
@@ -42,13 +42,7 @@ fn fe_curve(card: &MaterialCard) -> (ForceCurve, f64) {
 /// Largest relative difference of the normalised shear force of `fitted` from the card's law
 /// between 5° and 40°.
 fn law_error(fitted: &ShearInteraction, card: &MaterialCard, thickness: f64) -> f64 {
-    (5..=40)
-        .map(|deg| {
-            let g = f64::from(deg).to_radians();
-            let truth = card.fabric.shear.normalised_shear_force(thickness, g);
-            (fitted.normalised_shear_force(thickness, g) - truth).abs() / truth
-        })
-        .fold(0.0, f64::max)
+    shear_law_error(fitted, &card.fabric.shear, thickness, 5..=40)
 }
 
 fn fabric_thickness(card: &MaterialCard) -> f64 {

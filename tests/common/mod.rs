@@ -165,3 +165,20 @@ pub fn largest_twin_difference(
         })
         .fold(0.0, f64::max)
 }
+
+/// Largest relative difference of the normalised shear force `F_sh(gamma)` of `law` from that
+/// of `truth` (fabric layer of `thickness` mm) over `degrees`.
+pub fn shear_law_error(
+    law: &thermostamp::material::fabric::ShearInteraction,
+    truth: &thermostamp::material::fabric::ShearInteraction,
+    thickness: f64,
+    degrees: impl Iterator<Item = u32>,
+) -> f64 {
+    degrees
+        .map(|deg| f64::from(deg).to_radians())
+        .map(|g| {
+            let t = truth.normalised_shear_force(thickness, g);
+            (law.normalised_shear_force(thickness, g) - t).abs() / t
+        })
+        .fold(0.0, f64::max)
+}
