@@ -64,9 +64,14 @@ impl FormingModel {
             BlankShape::Rectangle { element_size, .. } => element_size,
             BlankShape::File { .. } => mesh.element_size(),
         };
-        if let ToolSet::BuiltIn(t) = &s.tools {
-            check_built_in_fit(s, t, &mesh, thickness, element_size)?;
-        }
+        let reach = match &s.tools {
+            ToolSet::BuiltIn(t) => {
+                let reach = blank_reach(&mesh, t);
+                check_built_in_fit(s, t, reach, thickness, element_size)?;
+                reach
+            }
+            ToolSet::Files(_) => 0.0,
+        };
         let warp = reference_warp(s.blank.reference_direction, s.blank.ply_angle);
         if mesh.warp_directions.is_some() && s.blank.ply_angle != 0.0 {
             return Err(format!(
@@ -101,7 +106,7 @@ impl FormingModel {
             ramp_time: 0.05 * p.stroke / simulated,
         };
         let (tools, holder_tool) = match &s.tools {
-            ToolSet::BuiltIn(t) => built_in_tool_set(s, t, thickness, punch, blank_mass)?,
+            ToolSet::BuiltIn(t) => built_in_tool_set(s, t, (thickness, reach), punch, blank_mass)?,
             ToolSet::Files(f) => {
                 let set = file_tool_set(s, f, (thickness, blank_mass), punch, &mut notes)?;
                 check_start_positions(&model, &set.0, thickness)?;
@@ -212,11 +217,11 @@ pub fn blank_mesh(s: &Scenario) -> Result<(Mesh, Vec<String>), String> {
 }
 
 /// The built-in tools' checks that need the blank's mesh: the clearance, the element size
-/// against the punch, and a file's blank reaching over the holder.
+/// against the punch, and a file's blank reaching (`reach` from the ridge) over the holder.
 fn check_built_in_fit(
     s: &Scenario,
     t: &Tools,
-    mesh: &Mesh,
+    reach: f64,
     thickness: f64,
     element_size: f64,
 ) -> Result<(), String> {
@@ -232,11 +237,6 @@ fn check_built_in_fit(
         let what = format!("the element size of {}", file.display());
         t.check_element_size(element_size, &what)
             .map_err(|e| format!("{}: {e}", s.origin))?;
-        let reach = mesh
-            .nodes
-            .iter()
-            .map(|x| distance_from_ridge(t.ridge_half_length(), x.x, x.y))
-            .fold(0.0, f64::max);
         if s.has_holder() && reach <= t.holder_inner_radius() {
             return Err(format!(
                 "{}: the blank of {} reaches {reach:.1} mm from the punch axis, not over the \
@@ -292,16 +292,17 @@ fn boundary_constraints(s: &Scenario, mesh: &Mesh) -> Result<Vec<Constraint>, St
 type ToolSetup = (Vec<RigidTool>, Option<usize>);
 
 /// Punch, die and (with a blank-holder force or gap) holder, placed off the blank's faces.
+/// The die and holder reach 10 mm beyond the blank (`reach` from the ridge).
 fn built_in_tool_set(
     s: &Scenario,
     t: &Tools,
-    thickness: f64,
+    (thickness, reach): (f64, f64),
     punch: Crosshead,
     blank_mass: f64,
 ) -> Result<ToolSetup, String> {
     let half = 0.5 * thickness;
     let ridge = t.ridge_half_length();
-    let outer = blank_reach(s, t) + 10.0;
+    let outer = reach + 10.0;
     let depth = s.process.stroke + t.die_fillet_radius + 10.0;
     let skirt = t.punch_radius;
     let punch_surface = shifted(
@@ -334,22 +335,13 @@ fn built_in_tool_set(
     Ok((tools, Some(2)))
 }
 
-/// How far the built-in rectangle reaches from the punch's ridge (mm); the built-in tools are
-/// made that wide (plus a margin). A file's blank: its farthest node.
-fn blank_reach(s: &Scenario, t: &Tools) -> f64 {
-    match s.blank.shape {
-        BlankShape::Rectangle { width, length, .. } => {
-            distance_from_ridge(t.ridge_half_length(), 0.5 * width, 0.5 * length)
-        }
-        BlankShape::File { .. } => blank_mesh(s)
-            .map(|(mesh, _)| {
-                mesh.nodes
-                    .iter()
-                    .map(|x| distance_from_ridge(t.ridge_half_length(), x.x, x.y))
-                    .fold(0.0, f64::max)
-            })
-            .unwrap_or(0.0),
-    }
+/// How far the blank reaches from the punch's ridge (mm): its farthest node (for the built-in
+/// rectangle, a corner).
+fn blank_reach(mesh: &Mesh, t: &Tools) -> f64 {
+    mesh.nodes
+        .iter()
+        .map(|x| distance_from_ridge(t.ridge_half_length(), x.x, x.y))
+        .fold(0.0, f64::max)
 }
 
 /// The punch (velocity-driven along +z) and the fixed die, with the scenario's friction.
