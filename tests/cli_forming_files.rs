@@ -245,3 +245,53 @@ fn the_quarter_example_reports_its_mesh() {
     );
     assert!(dir.join("formed-blank.inp").exists());
 }
+
+/// A pre-shaped blank: the right half of a 100 mm square folded up by 70°. The warp along x
+/// leaves the folded half's plane by 70°, past the 60° at which the projection is called
+/// ill-conditioned: the set-up says so, naming those triangles; a reference direction along the
+/// fold projects well everywhere, and nothing is said.
+#[test]
+fn an_ill_conditioned_fibre_projection_is_reported_before_the_run() {
+    use thermostamp::forming::{FormingModel, Scenario};
+    use thermostamp::mesh::{gmsh::write_msh, rectangle, DiagonalPattern};
+    let dir = scratch_dir("forming-files", "folded");
+    let mut mesh = rectangle(100.0, 100.0, 10, 10, DiagonalPattern::Right);
+    let (sin, cos) = 70f64.to_radians().sin_cos();
+    for x in &mut mesh.nodes {
+        if x.x > 0.0 {
+            *x = nalgebra::Vector3::new(x.x * cos, x.y, x.x * sin);
+        }
+    }
+    write_msh(&dir.join("folded.msh"), &mesh).unwrap();
+    let plane = square(60.0);
+    write_stl(
+        &dir.join("die.stl"),
+        &[
+            [plane[0], plane[2], plane[1]],
+            [plane[0], plane[3], plane[2]],
+        ],
+    );
+    write_stl(&dir.join("punch.stl"), &pyramid(-10.0));
+    let tools = "[tools]\nshape = \"files\"\npunch = { file = \"punch.stl\" }\n\
+                 die = { file = \"die.stl\" }\n";
+    let notes = |direction: &str| {
+        let blank = format!("mesh = \"folded.msh\"\nreference_direction = {direction}");
+        let path = scenario(&dir, "folded.toml", &blank, tools, ("", ""));
+        let scenario = Scenario::load(&path, &["process.stroke=5".into()]).unwrap();
+        FormingModel::new(&scenario).unwrap().notes
+    };
+    let along_x = notes("[1.0, 0.0, 0.0]");
+    let warning = along_x
+        .iter()
+        .find(|n| n.contains("out of the plane"))
+        .unwrap_or_else(|| panic!("no projection warning in {along_x:?}"));
+    assert!(
+        warning.contains("of 100 of 200 triangles") && warning.contains("(70.0°)"),
+        "{warning}"
+    );
+    let along_fold = notes("[0.0, 1.0, 0.0]");
+    assert!(
+        along_fold.iter().all(|n| !n.contains("out of the plane")),
+        "{along_fold:?}"
+    );
+}
