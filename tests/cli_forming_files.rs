@@ -295,3 +295,51 @@ fn an_ill_conditioned_fibre_projection_is_reported_before_the_run() {
         "{along_fold:?}"
     );
 }
+
+/// Tools from mesh files: the punch an Abaqus deck of rigid R3D3 elements (plus a shell part
+/// that `element_set` leaves out), the die a Gmsh file written with its normals up, away from
+/// the blank. Both are read, the die is turned to face the blank, and the notes say so.
+#[test]
+fn tools_from_gmsh_and_abaqus_files_are_read_and_oriented() {
+    use thermostamp::forming::{FormingModel, Scenario};
+    use thermostamp::mesh::{gmsh::write_msh, Mesh};
+    let dir = scratch_dir("forming-files", "mesh-tools");
+    let mut deck = String::from("*NODE\n");
+    let base = square(-20.0);
+    for (k, p) in base.iter().chain([&[0.0, 0.0, -1.0]]).enumerate() {
+        deck.push_str(&format!("{}, {}, {}, {}\n", k + 1, p[0], p[1], p[2]));
+    }
+    deck.push_str("*ELEMENT, TYPE=R3D3, ELSET=PUNCH\n");
+    for k in 0..4 {
+        deck.push_str(&format!("{}, {}, {}, 5\n", k + 1, k + 1, (k + 1) % 4 + 1));
+    }
+    deck.push_str("*ELEMENT, TYPE=S4R, ELSET=OTHER\n9, 1, 4, 3, 2\n");
+    std::fs::write(dir.join("punch.inp"), deck).unwrap();
+    let plane = square(10.0);
+    let die = Mesh {
+        nodes: plane.iter().map(|p| nalgebra::Vector3::from(*p)).collect(),
+        triangles: vec![[0, 1, 2], [0, 2, 3]],
+        node_sets: Default::default(),
+        element_sets: Default::default(),
+        warp_directions: None,
+    };
+    write_msh(&dir.join("die.msh"), &die).unwrap();
+    let tools = "[tools]\nshape = \"files\"\n\
+                 punch = { file = \"punch.inp\", element_set = \"PUNCH\" }\n\
+                 die = { file = \"die.msh\" }\n";
+    let blank = "width = 100.0\nlength = 100.0\nelement_size = 10.0";
+    let path = scenario(&dir, "mesh-tools.toml", blank, tools, ("", ""));
+    let scenario = Scenario::load(&path, &["process.stroke=5".into()]).unwrap();
+    let forming = FormingModel::new(&scenario).unwrap();
+    let notes = forming.notes.join("\n");
+    assert!(
+        notes.contains("punch: 4 triangles from") && notes.contains("normals towards the blank"),
+        "{notes}"
+    );
+    assert!(
+        notes.contains("die: 2 triangles from") && notes.contains("were flipped"),
+        "{notes}"
+    );
+    let die_tool = &forming.model.tools[forming.die_tool];
+    assert!(die_tool.surface.mean_facing(&-nalgebra::Vector3::z()) > 0.99);
+}
