@@ -77,36 +77,26 @@ impl Binary {
         self.bytes.extend_from_slice(s.as_bytes());
         self
     }
+    /// One value's bytes in the file's byte order.
+    fn value(&mut self, little: &[u8], big: &[u8]) {
+        let b = if self.little_endian { little } else { big };
+        self.bytes.extend_from_slice(b);
+    }
     fn size(&mut self, values: &[u64]) -> &mut Self {
         for v in values {
-            let b = if self.little_endian {
-                v.to_le_bytes()
-            } else {
-                v.to_be_bytes()
-            };
-            self.bytes.extend_from_slice(&b);
+            self.value(&v.to_le_bytes(), &v.to_be_bytes());
         }
         self
     }
     fn int(&mut self, values: &[i32]) -> &mut Self {
         for v in values {
-            let b = if self.little_endian {
-                v.to_le_bytes()
-            } else {
-                v.to_be_bytes()
-            };
-            self.bytes.extend_from_slice(&b);
+            self.value(&v.to_le_bytes(), &v.to_be_bytes());
         }
         self
     }
     fn double(&mut self, values: &[f64]) -> &mut Self {
         for v in values {
-            let b = if self.little_endian {
-                v.to_le_bytes()
-            } else {
-                v.to_be_bytes()
-            };
-            self.bytes.extend_from_slice(&b);
+            self.value(&v.to_le_bytes(), &v.to_be_bytes());
         }
         self
     }

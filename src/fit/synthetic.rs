@@ -38,6 +38,24 @@ impl Lcg {
     }
 }
 
+/// `points` stretches evenly from 1 to `1 + max_strain`, and `model` at each multiplied by
+/// `1 + noise * N(0, 1)` (clamped at zero, as a load cell in tension reads).
+fn noisy_curve(
+    (max_strain, points): (f64, usize),
+    noise: f64,
+    rng: &mut Lcg,
+    model: impl Fn(f64) -> f64,
+) -> (Vec<f64>, Vec<f64>) {
+    let stretch: Vec<f64> = (0..points)
+        .map(|i| 1.0 + max_strain * i as f64 / (points - 1) as f64)
+        .collect();
+    let values = stretch
+        .iter()
+        .map(|&l| (model(l) * (1.0 + noise * rng.normal())).max(0.0))
+        .collect();
+    (stretch, values)
+}
+
 /// A curve at `temperature` and `strain_rate` from `(C10, eta1)`: `points` stretches evenly
 /// from 1 to `1 + max_strain` (given as `(max_strain, points)`), each true stress multiplied by
 /// `1 + noise * N(0, 1)` (clamped at zero, as a load cell in tension reads).
@@ -50,16 +68,9 @@ pub fn tension_curve(
     noise: f64,
     rng: &mut Lcg,
 ) -> TensionCurve {
-    let stretch: Vec<f64> = (0..points)
-        .map(|i| 1.0 + max_strain * i as f64 / (points - 1) as f64)
-        .collect();
-    let stress = stretch
-        .iter()
-        .map(|&l| {
-            let exact = uniaxial_stress(c10, eta1, l, strain_rate);
-            (exact * (1.0 + noise * rng.normal())).max(0.0)
-        })
-        .collect();
+    let (stretch, stress) = noisy_curve((max_strain, points), noise, rng, |l| {
+        uniaxial_stress(c10, eta1, l, strain_rate)
+    });
     TensionCurve {
         origin: origin.to_string(),
         temperature,
@@ -81,16 +92,9 @@ pub fn strip_curve(
     noise: f64,
     rng: &mut Lcg,
 ) -> StripCurve {
-    let stretch: Vec<f64> = (0..points)
-        .map(|i| 1.0 + max_strain * i as f64 / (points - 1) as f64)
-        .collect();
-    let force_per_width = stretch
-        .iter()
-        .map(|&l| {
-            let exact = strip_force_per_width(thickness, coefficients, l);
-            (exact * (1.0 + noise * rng.normal())).max(0.0)
-        })
-        .collect();
+    let (stretch, force_per_width) = noisy_curve((max_strain, points), noise, rng, |l| {
+        strip_force_per_width(thickness, coefficients, l)
+    });
     StripCurve {
         origin: origin.to_string(),
         stretch,
