@@ -147,23 +147,15 @@ pub fn run(command: &TestCommand) -> anyhow::Result<()> {
 /// The card, and the test temperature: given, or for a dry fabric room temperature.
 fn card_and_temperature(common: &CommonArgs) -> anyhow::Result<(MaterialCard, f64)> {
     let card = MaterialCard::load(&common.card)?;
-    let temperature = match (common.temperature, &card.matrix) {
-        (Some(t), None) => t,
+    let temperature = match (common.temperature, card.temperature_range()) {
+        (Some(t), _) => t,
         (None, None) => 20.0,
-        (t, Some(matrix)) => {
-            let (lo, hi) = matrix.parameters_range();
-            match t {
-                None => anyhow::bail!(
-                    "--temperature is required: the card's matrix is tabulated from {lo} to {hi} °C"
-                ),
-                // refused here, as bad input, rather than by the first element of the run
-                Some(t) if !(lo..=hi).contains(&t) => anyhow::bail!(
-                    "--temperature {t}: outside the card's matrix table, {lo} to {hi} °C"
-                ),
-                Some(t) => t,
-            }
-        }
+        (None, Some((lo, hi))) => anyhow::bail!(
+            "--temperature is required: the card's matrix is tabulated from {lo} to {hi} °C"
+        ),
     };
+    card.check_temperature("--temperature", temperature)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", common.card.display()))?;
     Ok((card, temperature))
 }
 

@@ -20,7 +20,7 @@
 //! `sigma = lambda * P`).
 
 use crate::io::xy_curve::{parse_xy_curve, read_curve_text, CurveLayout};
-use crate::io::{describe_toml_error, InputError};
+use crate::io::{from_toml_text, InputError};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 
@@ -58,8 +58,7 @@ pub fn read_manifest(path: &Path) -> Result<Vec<TensionCurve>, InputError> {
     let origin = path.display().to_string();
     let text = std::fs::read_to_string(path)
         .map_err(|e| InputError::in_file(&origin, format!("cannot read the manifest: {e}")))?;
-    let manifest: Manifest = toml::from_str(&text)
-        .map_err(|e| InputError::in_file(&origin, describe_toml_error(&text, &e)))?;
+    let manifest: Manifest = from_toml_text(&text).map_err(|e| InputError::in_file(&origin, e))?;
     if manifest.curve.is_empty() {
         return Err(InputError::in_file(
             &origin,

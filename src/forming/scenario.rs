@@ -2,7 +2,7 @@
 //! checked. Unknown keys and inconsistent values are errors that name the key; any scalar can
 //! be overridden from the command line (`--set process.temperature=310`).
 
-use crate::io::describe_toml_error;
+use crate::io::{from_toml_text, from_toml_value};
 use crate::mesh::DiagonalPattern;
 use nalgebra::Vector3;
 use serde::Deserialize;
@@ -420,16 +420,14 @@ impl Scenario {
         let text = std::fs::read_to_string(path)
             .map_err(|e| error(format!("cannot read the scenario: {e}")))?;
         let file: ScenarioFile = if overrides.is_empty() {
-            toml::from_str(&text).map_err(|e| error(describe_toml_error(&text, &e)))?
+            from_toml_text(&text).map_err(error)?
         } else {
-            let mut table: toml::Table =
-                toml::from_str(&text).map_err(|e| error(describe_toml_error(&text, &e)))?;
+            let mut table: toml::Table = from_toml_text(&text).map_err(error)?;
             for o in overrides {
                 apply_override(&mut table, o).map_err(error)?;
             }
-            toml::Value::Table(table)
-                .try_into()
-                .map_err(|e: toml::de::Error| error(e.message().trim().replace('\n', " ")))?
+            from_toml_value(toml::Value::Table(table))
+                .map_err(|e| error(format!("{e} (with --set {})", overrides.join(" --set "))))?
         };
         let folder = path.parent().unwrap_or(Path::new("."));
         let scenario = Scenario {

@@ -58,6 +58,8 @@ pub struct FormingModel {
 impl FormingModel {
     pub fn new(s: &Scenario) -> Result<Self, String> {
         let card = MaterialCard::load(&s.blank.card).map_err(|e| e.to_string())?;
+        card.check_temperature("process.temperature", s.process.temperature)
+            .map_err(|e| format!("{}: {e} ({})", s.origin, s.blank.card.display()))?;
         let thickness = card.laminate.reference_thickness();
         let (mesh, mut notes) = blank_mesh(s)?;
         let element_size = match s.blank.shape {

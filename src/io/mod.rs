@@ -35,16 +35,88 @@ impl InputError {
     }
 }
 
-/// One line: `line L, column C: message`.
-pub fn describe_toml_error(text: &str, e: &toml::de::Error) -> String {
-    let message = e.message().trim().replace('\n', " ");
-    match e.span() {
-        Some(span) => {
-            let before = &text[..span.start.min(text.len())];
-            let line = before.matches('\n').count() + 1;
-            let column = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
-            format!("line {line}, column {column}: {message}")
+/// Deserializes TOML `text` into `T`; an error is one line naming where and what:
+/// `line L, column C: key `a.b`: message` (the key is left out where the text has none, e.g.
+/// a syntax error).
+pub fn from_toml_text<T: serde::de::DeserializeOwned>(text: &str) -> Result<T, String> {
+    let deserializer = toml::Deserializer::new(text);
+    serde_path_to_error::deserialize(deserializer).map_err(|e| {
+        let key = key_of(e.path());
+        let inner = e.into_inner();
+        let message = format!("{key}{}", toml_message(&inner));
+        match inner.span() {
+            Some(span) => format!("{}: {message}", line_and_column(text, span.start)),
+            None => message,
         }
-        None => message,
+    })
+}
+
+/// Deserializes a TOML table built in memory (a scenario with `--set` overrides applied) into
+/// `T`; an error names the key: `key `a.b`: message`.
+pub fn from_toml_value<T: serde::de::DeserializeOwned>(value: toml::Value) -> Result<T, String> {
+    serde_path_to_error::deserialize(value).map_err(|e| {
+        let key = key_of(e.path());
+        format!("{key}{}", toml_message(e.inner()))
+    })
+}
+
+/// `key `a.b`: ` for a path inside the document, nothing at its root.
+fn key_of(path: &serde_path_to_error::Path) -> String {
+    let path = path.to_string();
+    if path.is_empty() || path == "." {
+        String::new()
+    } else {
+        format!("key `{path}`: ")
+    }
+}
+
+fn toml_message(e: &toml::de::Error) -> String {
+    e.message().trim().replace('\n', " ")
+}
+
+/// `line L, column C` of the byte offset `at` in `text`.
+fn line_and_column(text: &str, at: usize) -> String {
+    let before = &text[..at.min(text.len())];
+    let line = before.matches('\n').count() + 1;
+    let column = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
+    format!("line {line}, column {column}")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[derive(serde::Deserialize, Debug)]
+    #[allow(dead_code)]
+    struct Doc {
+        process: Process,
+    }
+
+    #[derive(serde::Deserialize, Debug)]
+    #[allow(dead_code)]
+    struct Process {
+        stroke: f64,
+    }
+
+    #[test]
+    fn a_type_error_names_the_key_and_the_line() {
+        let e = from_toml_text::<Doc>("[process]\nstroke = \"abc\"\n").unwrap_err();
+        assert!(
+            e.starts_with("line 2, column 10: key `process.stroke`: "),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn a_value_built_in_memory_names_the_key() {
+        let value: toml::Value = toml::from_str("[process]\nstroke = \"abc\"\n").unwrap();
+        let e = from_toml_value::<Doc>(value).unwrap_err();
+        assert!(e.starts_with("key `process.stroke`: "), "{e}");
+    }
+
+    #[test]
+    fn a_syntax_error_names_the_line() {
+        let e = from_toml_text::<Doc>("[process]\nstroke = = 1\n").unwrap_err();
+        assert!(e.starts_with("line 2, column"), "{e}");
     }
 }

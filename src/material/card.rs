@@ -5,7 +5,7 @@
 use super::fabric::{ShearInteraction, YarnTension};
 use super::{Laminate, Layer, MaterialLaw, TemperatureTable, ViscoHyperelasticMatrix, WovenFabric};
 use crate::element::BendingRigidity;
-use crate::io::describe_toml_error;
+use crate::io::from_toml_text;
 use serde::Deserialize;
 use std::path::Path;
 use std::sync::Arc;
@@ -114,14 +114,31 @@ impl MaterialCard {
         Self::from_toml(&text, &origin)
     }
 
+    /// The temperatures over which the card's tables are defined (all of them at once);
+    /// `None` for a card with nothing tabulated (a dry fabric), which holds at any temperature.
+    pub fn temperature_range(&self) -> Option<(f64, f64)> {
+        self.matrix.as_ref().map(|m| m.parameters_range())
+    }
+
+    /// Whether the card's tables cover `temperature` (°C), which `key` (a scenario key or a
+    /// command-line option) gave: the run is refused before it starts rather than stopped by
+    /// its first element.
+    pub fn check_temperature(&self, key: &str, temperature: f64) -> Result<(), String> {
+        match self.temperature_range() {
+            Some((lo, hi)) if !(lo..=hi).contains(&temperature) => Err(format!(
+                "{key} = {temperature} °C is outside the card's tables ({lo} to {hi} °C): choose                  a temperature inside them, or extend the tables of the card"
+            )),
+            _ => Ok(()),
+        }
+    }
+
     /// Reads and checks a card from TOML text; `origin` names it in messages.
     pub fn from_toml(text: &str, origin: &str) -> Result<Self, CardError> {
         let error = |message: String| CardError {
             origin: origin.to_string(),
             message,
         };
-        let file: CardFile =
-            toml::from_str(text).map_err(|e| error(describe_toml_error(text, &e)))?;
+        let file: CardFile = from_toml_text(text).map_err(error)?;
         file.check().map_err(error)
     }
 }
