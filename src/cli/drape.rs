@@ -19,7 +19,7 @@ pub struct Args {
     start: Option<(f64, f64)>,
     /// Plan angle of the first generator, the warp, from x in degrees (default: the blank's
     /// ply angle); the weft is the second generator, at +90° in the tangent plane.
-    #[arg(long, value_name = "DEGREES", allow_hyphen_values = true)]
+    #[arg(long, value_name = "DEGREES", allow_hyphen_values = true, value_parser = parse_angle)]
     warp_angle: Option<f64>,
 }
 
@@ -35,13 +35,23 @@ fn parse_point(text: &str) -> Result<(f64, f64), String> {
     }
 }
 
+fn parse_angle(text: &str) -> Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(a) if a.is_finite() => Ok(a),
+        _ => Err(format!("'{text}': expected an angle in degrees")),
+    }
+}
+
 pub fn run(args: &Args) -> anyhow::Result<()> {
     let (scenario, dir) = args.scenario.load()?;
     let generators = Generators {
         start: args.start.unwrap_or((0.0, 0.0)),
         warp_angle: args.warp_angle.unwrap_or(scenario.blank.ply_angle),
     };
-    let net = drape_preview(&scenario, &generators).map_err(|e| anyhow::anyhow!("drape: {e}"))?;
+    let net = drape_preview(&scenario, &generators).map_err(|e| match args.start {
+        Some((x, y)) => anyhow::anyhow!("drape from --start {x},{y}: {e}"),
+        None => anyhow::anyhow!("drape: {e}"),
+    })?;
     std::fs::create_dir_all(&dir)
         .with_context(|| format!("cannot create the output folder {}", dir.display()))?;
     let csv = write_cells(&dir, &net)?;

@@ -52,16 +52,16 @@ pub struct ShearArgs {
     #[arg(long, value_enum, default_value = "bias-extension")]
     test: ShearTestKind,
     /// Bias extension: specimen width W (mm).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     width: Option<f64>,
     /// Bias extension: free length H between the clamps (mm).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     length: Option<f64>,
     /// Picture frame: frame side, pin to pin (mm).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     frame_side: Option<f64>,
     /// Picture frame: side of the sheared fabric square (mm); default the frame side.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     fabric_side: Option<f64>,
     /// Material card whose [fabric] shear is replaced (everything else is kept as it is).
     #[arg(long)]
@@ -79,7 +79,7 @@ pub struct ShearArgs {
     #[arg(long, default_value_t = 3)]
     terms: usize,
     /// Largest shear angle fitted (degrees).
-    #[arg(long, default_value_t = 50.0)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = 50.0)]
     max_shear: f64,
     /// PNG of the normalised shear force vs shear angle: data (dots) and model (line); with
     /// --refine-fe, of the crosshead force: data (dots) and the final FE run (line).
@@ -90,7 +90,7 @@ pub struct ShearArgs {
     #[arg(long)]
     refine_fe: bool,
     /// --refine-fe: cell size of the FE specimen (mm); default W/6.
-    #[arg(long, requires = "refine_fe")]
+    #[arg(long, allow_negative_numbers = true, requires = "refine_fe")]
     fe_element_size: Option<f64>,
     /// --refine-fe: Gauss-Newton iterations at most (one FE run each, more when a step is
     /// halved).
@@ -121,7 +121,7 @@ pub struct MatrixArgs {
     #[arg(long)]
     output: PathBuf,
     /// Bulk modulus K of the resin (MPa): D1 = 2/K at every temperature.
-    #[arg(long, conflicts_with = "poisson")]
+    #[arg(long, allow_negative_numbers = true, conflicts_with = "poisson")]
     bulk_modulus: Option<f64>,
     /// Poisson ratio of the resin: D1 from K = 2 G (1 + nu) / (3 (1 - 2 nu)), G = 2 C10(T).
     #[arg(long, allow_negative_numbers = true)]

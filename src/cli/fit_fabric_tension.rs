@@ -35,7 +35,7 @@ pub struct FabricTensionArgs {
     #[arg(long)]
     terms: Option<usize>,
     /// Specimen width (mm), for CSV files with a force column (N).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     width: Option<f64>,
     /// PNG comparing the data with the fitted model.
     #[arg(long)]

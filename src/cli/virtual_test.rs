@@ -72,6 +72,37 @@ pub struct CommonArgs {
 }
 
 impl CommonArgs {
+    /// The numbers given on the command line, each checked and named by its option, before
+    /// the test's own checks (which name them as the library does).
+    fn check_numbers(&self) -> anyhow::Result<()> {
+        let positive = [
+            ("speed", self.speed),
+            ("element-size", self.element_size),
+            ("end-displacement", self.end_displacement),
+        ];
+        for (option, value) in positive {
+            if let Some(v) = value {
+                dimension(option, v)?;
+            }
+        }
+        if let Some(s) = self.time_scaling {
+            if !(s.is_finite() && s >= 1.0) {
+                anyhow::bail!("--time-scaling = {s}: must be at least 1");
+            }
+        }
+        if let Some(dt) = self.target_step {
+            if !(dt.is_finite() && dt >= 0.0) {
+                anyhow::bail!(
+                    "--target-step = {dt}: must be a positive time step (s), or 0 for none"
+                );
+            }
+        }
+        if !(self.damping.is_finite() && self.damping >= 0.0) {
+            anyhow::bail!("--damping = {}: must be >= 0 (1/s)", self.damping);
+        }
+        Ok(())
+    }
+
     /// Overrides a test's default process with the options given.
     fn apply(&self, p: &mut TestProcess) {
         p.pattern = self.pattern;
@@ -146,6 +177,7 @@ pub fn run(command: &TestCommand) -> anyhow::Result<()> {
 
 /// The card, and the test temperature: given, or for a dry fabric room temperature.
 fn card_and_temperature(common: &CommonArgs) -> anyhow::Result<(MaterialCard, f64)> {
+    common.check_numbers()?;
     let card = MaterialCard::load(&common.card)?;
     let temperature = match (common.temperature, card.temperature_range()) {
         (Some(t), _) => t,
@@ -165,7 +197,7 @@ fn dimension(option: &str, value: f64) -> anyhow::Result<f64> {
     if value.is_finite() && value > 0.0 {
         Ok(value)
     } else {
-        anyhow::bail!("--{option} = {value}: must be a positive length in mm")
+        anyhow::bail!("--{option} = {value}: must be a positive number")
     }
 }
 
@@ -173,8 +205,8 @@ fn bias_extension(args: &BiasArgs) -> anyhow::Result<()> {
     let c = &args.common;
     let (card, temperature) = card_and_temperature(c)?;
     let mut test = BiasExtension::benchmark(temperature);
-    test.width = args.width;
-    test.length = args.length;
+    test.width = dimension("width", args.width)?;
+    test.length = dimension("length", args.length)?;
     c.apply(&mut test.process);
     let names = ("bias extension", "bias-extension");
     sheet_test(c, &card, names, &test, bias_report)
@@ -186,6 +218,12 @@ fn uniaxial(args: &UniaxialArgs) -> anyhow::Result<()> {
     let mut test = UniaxialTension::standard(temperature);
     test.width = dimension("width", args.width)?;
     test.length = dimension("length", args.length)?;
+    if !args.ply_angle.is_finite() {
+        anyhow::bail!(
+            "--ply-angle = {}: must be an angle in degrees",
+            args.ply_angle
+        );
+    }
     test.ply_angle = args.ply_angle;
     c.apply(&mut test.process);
     let names = ("uniaxial test", "uniaxial");

@@ -1,0 +1,1087 @@
+//! Bad input and faults over every subcommand, as a careless or adversarial user would give
+//! them: each case has the exit code it must give (2: bad input, found before the first step)
+//! and the pieces its one-line message must name (the file and line, the key, or the
+//! command-line option). None may panic (101), abort (134) or hang.
+
+mod common;
+
+use common::{repo_path, scratch_dir, thermostamp};
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+/// One adversarial invocation.
+struct Case {
+    name: String,
+    args: Vec<String>,
+    code: i32,
+    /// Pieces the message must contain (file, line, key or option).
+    names: Vec<String>,
+}
+
+/// The fixtures every case draws on, in one scratch folder.
+struct Fixtures {
+    dir: PathBuf,
+    /// The hemisphere example with the card's path made absolute.
+    scenario: String,
+    card: String,
+}
+
+impl Fixtures {
+    fn new() -> Self {
+        let dir = scratch_dir("adversarial", "fixtures");
+        let materials = repo_path("materials");
+        let scenario = std::fs::read_to_string(repo_path("examples/hemisphere.toml"))
+            .unwrap()
+            .replace("../materials/", &format!("{}/", materials.display()));
+        let card = std::fs::read_to_string(repo_path("materials/t300-5hs-pps.toml")).unwrap();
+        Self {
+            dir,
+            scenario,
+            card,
+        }
+    }
+
+    /// Writes `text` to `name` in the scratch folder and returns its path.
+    fn file(&self, name: &str, text: &[u8]) -> String {
+        let path = self.dir.join(name);
+        std::fs::write(&path, text).unwrap();
+        path.display().to_string()
+    }
+
+    /// The example scenario with `from` replaced by `to` (which must occur), written to `name`.
+    fn scenario(&self, name: &str, from: &str, to: &str) -> String {
+        assert!(
+            self.scenario.contains(from),
+            "{name}: '{from}' not in the example"
+        );
+        self.file(
+            &format!("{name}.toml"),
+            self.scenario.replace(from, to).as_bytes(),
+        )
+    }
+
+    /// The T300/PPS card with `from` replaced by `to` (which must occur), written to `name`.
+    fn card(&self, name: &str, from: &str, to: &str) -> String {
+        assert!(self.card.contains(from), "{name}: '{from}' not in the card");
+        self.file(
+            &format!("{name}.toml"),
+            self.card.replace(from, to).as_bytes(),
+        )
+    }
+
+    /// The example scenario on the card file `card`.
+    fn scenario_on_card(&self, name: &str, card: &str) -> String {
+        let shipped = format!("{}", repo_path("materials/t300-5hs-pps.toml").display());
+        self.scenario(name, &shipped, card)
+    }
+
+    /// The example scenario with its blank read from the mesh file `mesh`.
+    fn file_blank(&self, name: &str, mesh: &str) -> String {
+        let rectangle = ["width =", "length =", "element_size =", "pattern ="];
+        let text: String = self
+            .scenario
+            .lines()
+            .filter(|l| !rectangle.iter().any(|key| l.starts_with(key)))
+            .map(|l| format!("{l}\n"))
+            .collect::<String>()
+            .replace("[blank]\n", &format!("[blank]\nmesh = \"{mesh}\"\n"));
+        self.file(&format!("{name}.toml"), text.as_bytes())
+    }
+
+    fn output(&self, name: &str) -> String {
+        self.dir.join("out").join(name).display().to_string()
+    }
+}
+
+fn case(name: &str, args: &[&str], code: i32, names: &[&str]) -> Case {
+    Case {
+        name: name.into(),
+        args: args.iter().map(|s| s.to_string()).collect(),
+        code,
+        names: names.iter().map(|s| s.to_string()).collect(),
+    }
+}
+
+fn repo(relative: &str) -> String {
+    repo_path(relative).display().to_string()
+}
+
+/// Usage errors that clap finds, before any file is read.
+fn usage_cases(f: &Fixtures) -> Vec<Case> {
+    let card = repo("materials/t300-5hs-pps.toml");
+    let example = repo("examples/hemisphere.toml");
+    vec![
+        case("no command", &[], 2, &["Usage"]),
+        case("unknown command", &["frobnicate"], 2, &["frobnicate"]),
+        case("run without scenario", &["run"], 2, &["<SCENARIO>"]),
+        case(
+            "test without card",
+            &["test", "bias-extension"],
+            2,
+            &["--card"],
+        ),
+        case(
+            "width not a number",
+            &["test", "uniaxial", "--card", &card, "--width", "abc"],
+            2,
+            &["--width", "abc"],
+        ),
+        case(
+            "threads not a number",
+            &["run", &example, "--threads", "many"],
+            2,
+            &["--threads"],
+        ),
+        case(
+            "threads zero",
+            &[
+                "run",
+                &example,
+                "--threads",
+                "0",
+                "--output",
+                &f.output("t0"),
+            ],
+            2,
+            &["--threads"],
+        ),
+        case(
+            "unknown layer",
+            &[
+                "material-point",
+                "--card",
+                &card,
+                "--layer",
+                "core",
+                "--history",
+                "x.csv",
+            ],
+            2,
+            &["--layer", "core"],
+        ),
+        case(
+            "unknown test",
+            &[
+                "fit", "shear", "--test", "tumble", "--data", "x.csv", "--card", &card,
+            ],
+            2,
+            &["--test", "tumble"],
+        ),
+        case(
+            "unknown pattern",
+            &[
+                "test",
+                "bias-extension",
+                "--card",
+                &card,
+                "--pattern",
+                "zigzag",
+            ],
+            2,
+            &["--pattern", "zigzag"],
+        ),
+    ]
+}
+
+/// Material cards and histories of `material-point`.
+fn material_point_cases(f: &Fixtures) -> Vec<Case> {
+    let history = repo("examples/material-point/laminate-shear-300C.csv");
+    let point = |card: &str, layer: &str, history: &str| {
+        vec![
+            "material-point".to_string(),
+            "--card".into(),
+            card.into(),
+            "--layer".into(),
+            layer.into(),
+            "--history".into(),
+            history.into(),
+        ]
+    };
+    let mut cases = Vec::new();
+    let mut add = |name: &str, args: Vec<String>, names: &[String]| {
+        cases.push(Case {
+            name: name.into(),
+            args,
+            code: 2,
+            names: names.to_vec(),
+        })
+    };
+    let missing = f.dir.join("no-such-card.toml").display().to_string();
+    add(
+        "card missing",
+        point(&missing, "laminate", &history),
+        std::slice::from_ref(&missing),
+    );
+    let folder = f.dir.display().to_string();
+    add(
+        "card is a folder",
+        point(&folder, "laminate", &history),
+        std::slice::from_ref(&folder),
+    );
+    let empty = f.file("empty-card.toml", b"");
+    add(
+        "card empty",
+        point(&empty, "laminate", &history),
+        &[empty.clone(), "name".into()],
+    );
+    let garbage = f.file(
+        "garbage-card.toml",
+        &[0xff, 0xfe, 0x00, 0x9c, 0x42, 0x00, 0x13],
+    );
+    add(
+        "card garbage bytes",
+        point(&garbage, "laminate", &history),
+        &[garbage.clone()],
+    );
+    let cards: [(&str, &str, &str, &str); 9] = [
+        (
+            "unknown key",
+            "density = 1.56e-9",
+            "density = 1.56e-9\ndensty = 1",
+            "densty",
+        ),
+        (
+            "density text",
+            "density = 1.56e-9",
+            "density = \"heavy\"",
+            "density",
+        ),
+        (
+            "density negative",
+            "density = 1.56e-9",
+            "density = -1.56e-9",
+            "density",
+        ),
+        (
+            "c10 nan",
+            "c10 = [0.20, 0.10, 0.05]",
+            "c10 = [0.20, nan, 0.05]",
+            "c10",
+        ),
+        (
+            "temperatures decreasing",
+            "temperature = [280.0, 300.0, 320.0]",
+            "temperature = [280.0, 320.0, 300.0]",
+            "temperature",
+        ),
+        (
+            "table lengths differ",
+            "c10 = [0.20, 0.10, 0.05]",
+            "c10 = [0.20, 0.10]",
+            "c10",
+        ),
+        (
+            "thickness zero",
+            "fabric_thickness = 0.23",
+            "fabric_thickness = 0.0",
+            "fabric_thickness",
+        ),
+        (
+            "shear text",
+            "shear = [0.25, 0.0, 2.0]",
+            "shear = \"stiff\"",
+            "shear",
+        ),
+        ("bending negative", "warp = 1.0", "warp = -1.0", "warp"),
+    ];
+    for (name, from, to, key) in cards {
+        let card = f.card(&format!("card-{}", name.replace(' ', "-")), from, to);
+        add(
+            &format!("card {name}"),
+            point(&card, "laminate", &history),
+            &[card.clone(), key.into()],
+        );
+    }
+    let card = repo("materials/t300-5hs-pps.toml");
+    let missing = f.dir.join("no-such-history.csv").display().to_string();
+    add(
+        "history missing",
+        point(&card, "laminate", &missing),
+        std::slice::from_ref(&missing),
+    );
+    let header = "t,F11,F12,F21,F22,T\n";
+    let histories: [(&str, String, &str); 7] = [
+        ("empty", String::new(), ""),
+        (
+            "wrong column",
+            "t,F11,F12,F21,G22,T\n0,1,0,0,1,300\n".into(),
+            "G22",
+        ),
+        (
+            "text cell",
+            format!("{header}0,1,0,0,1,300\n0.1,1,abc,0,1,300\n"),
+            "line 3",
+        ),
+        (
+            "nan cell",
+            format!("{header}0,1,0,0,1,300\n0.1,1,nan,0,1,300\n"),
+            "line 3",
+        ),
+        (
+            "time backwards",
+            format!("{header}0,1,0,0,1,300\n1,1,0,0,1,300\n0.5,1,0,0,1,300\n"),
+            "line 4",
+        ),
+        (
+            "inverted",
+            format!("{header}0,1,0,0,1,300\n1,-1,0,0,1,300\n"),
+            "line 3",
+        ),
+        (
+            "too hot",
+            format!("{header}0,1,0,0,1,300\n1,1,0,0,1,900\n"),
+            "900",
+        ),
+    ];
+    for (name, text, piece) in histories {
+        let path = f.file(
+            &format!("history-{}.csv", name.replace(' ', "-")),
+            text.as_bytes(),
+        );
+        add(
+            &format!("history {name}"),
+            point(&card, "laminate", &path),
+            &[path.clone(), piece.into()],
+        );
+    }
+    let mut angle = point(&card, "laminate", &history);
+    angle.extend(["--angle".into(), "nan".into()]);
+    add("angle nan", angle, &["--angle".into()]);
+    cases
+}
+
+/// Virtual tests: options out of range, refused before the first step.
+fn virtual_test_cases(f: &Fixtures) -> Vec<Case> {
+    let card = repo("materials/t300-5hs-pps.toml");
+    let fabric = repo("materials/twintex-plain-weave.toml");
+    let test = |kind: &str, card: &str, extra: &[&str], out: &str| {
+        let mut args: Vec<String> = ["test", kind, "--card", card]
+            .iter()
+            .map(|s| s.to_string())
+            .collect();
+        args.extend(["--output".to_string(), f.output(out)]);
+        args.extend(extra.iter().map(|s| s.to_string()));
+        args
+    };
+    let prepreg = ["--temperature", "300"];
+    let with = |base: &[&'static str], more: &[&'static str]| -> Vec<&'static str> {
+        base.iter().chain(more).copied().collect()
+    };
+    let cases: Vec<(&str, &str, &str, Vec<&str>, &str)> = vec![
+        (
+            "bias width negative",
+            "bias-extension",
+            &fabric,
+            vec!["--width", "-5"],
+            "--width",
+        ),
+        (
+            "bias too short",
+            "bias-extension",
+            &fabric,
+            vec!["--width", "150", "--length", "200"],
+            "length",
+        ),
+        (
+            "bias speed zero",
+            "bias-extension",
+            &fabric,
+            vec!["--speed", "0"],
+            "--speed",
+        ),
+        (
+            "bias speed infinite",
+            "bias-extension",
+            &fabric,
+            vec!["--speed", "inf"],
+            "--speed",
+        ),
+        (
+            "bias element size zero",
+            "bias-extension",
+            &fabric,
+            vec!["--element-size", "0"],
+            "--element-size",
+        ),
+        (
+            "bias prepreg without temperature",
+            "bias-extension",
+            &card,
+            vec![],
+            "--temperature",
+        ),
+        (
+            "bias prepreg too hot",
+            "bias-extension",
+            &card,
+            vec!["--temperature", "400"],
+            "--temperature",
+        ),
+        (
+            "bias time scaling below one",
+            "bias-extension",
+            &card,
+            with(&prepreg, &["--time-scaling", "0.5"]),
+            "--time-scaling",
+        ),
+        (
+            "bias negative target step",
+            "bias-extension",
+            &fabric,
+            vec!["--target-step", "-1"],
+            "--target-step",
+        ),
+        (
+            "bias negative damping",
+            "bias-extension",
+            &fabric,
+            vec!["--damping", "-1"],
+            "--damping",
+        ),
+        (
+            "bias negative travel",
+            "bias-extension",
+            &fabric,
+            vec!["--end-displacement", "-3"],
+            "--end-displacement",
+        ),
+        (
+            "uniaxial ply angle nan",
+            "uniaxial",
+            &fabric,
+            vec!["--ply-angle", "nan"],
+            "--ply-angle",
+        ),
+        (
+            "uniaxial length zero",
+            "uniaxial",
+            &fabric,
+            vec!["--length", "0"],
+            "--length",
+        ),
+        (
+            "picture frame side zero",
+            "picture-frame",
+            &fabric,
+            vec!["--side", "0"],
+            "--side",
+        ),
+        (
+            "picture frame side nan",
+            "picture-frame",
+            &fabric,
+            vec!["--side", "nan"],
+            "--side",
+        ),
+    ];
+    cases
+        .into_iter()
+        .map(|(name, kind, card, extra, piece)| Case {
+            name: name.into(),
+            args: test(kind, card, &extra, &name.replace(' ', "-")),
+            code: 2,
+            names: vec![piece.into()],
+        })
+        .collect()
+}
+
+/// Scenario files and their overrides for `run` (and `drape`).
+fn scenario_cases(f: &Fixtures) -> Vec<Case> {
+    let example = repo("examples/hemisphere.toml");
+    let run = |scenario: &str, extra: &[&str], out: &str| {
+        let mut args = vec!["run".to_string(), scenario.to_string()];
+        args.extend(extra.iter().map(|s| s.to_string()));
+        args.extend(["--output".to_string(), f.output(out)]);
+        args
+    };
+    let mut cases = Vec::new();
+    let missing = f.dir.join("no-such-scenario.toml").display().to_string();
+    cases.push(Case {
+        name: "scenario missing".into(),
+        args: run(&missing, &[], "missing"),
+        code: 2,
+        names: vec![missing.clone()],
+    });
+    let syntax = f.file("syntax.toml", b"[blank\ncard = 1\n");
+    cases.push(Case {
+        name: "scenario syntax".into(),
+        args: run(&syntax, &[], "syntax"),
+        code: 2,
+        names: vec![syntax.clone(), "line 1".into()],
+    });
+    let empty = f.file("empty-scenario.toml", b"");
+    cases.push(Case {
+        name: "scenario empty".into(),
+        args: run(&empty, &[], "empty"),
+        code: 2,
+        names: vec![empty.clone(), "blank".into()],
+    });
+    let edits: [(&str, &str, &str, &str); 22] = [
+        ("unknown section", "[output]", "[outputs]", "outputs"),
+        (
+            "unknown key",
+            "stroke = 30.0",
+            "stroke = 30.0\nstroke_depth = 3",
+            "stroke_depth",
+        ),
+        (
+            "element size zero",
+            "element_size = 8.0",
+            "element_size = 0.0",
+            "blank.element_size",
+        ),
+        (
+            "element size text",
+            "element_size = 8.0",
+            "element_size = \"fine\"",
+            "blank.element_size",
+        ),
+        ("width nan", "width = 160.0", "width = nan", "blank.width"),
+        (
+            "punch speed negative",
+            "punch_speed = 10.0",
+            "punch_speed = -1.0",
+            "process.punch_speed",
+        ),
+        (
+            "punch speed infinite",
+            "punch_speed = 10.0",
+            "punch_speed = inf",
+            "process.punch_speed",
+        ),
+        (
+            "time scaling below one",
+            "time_scaling = 10.0",
+            "time_scaling = 0.5",
+            "process.time_scaling",
+        ),
+        (
+            "friction negative",
+            "die = 0.2",
+            "die = -0.1",
+            "process.friction.die",
+        ),
+        (
+            "history points zero",
+            "history_points = 60",
+            "history_points = 0",
+            "output.history_points",
+        ),
+        (
+            "history points negative",
+            "history_points = 60",
+            "history_points = -5",
+            "output.history_points",
+        ),
+        (
+            "frames text",
+            "frames = 10",
+            "frames = \"many\"",
+            "output.frames",
+        ),
+        (
+            "locking angle 95",
+            "locking_angle = 45.0",
+            "locking_angle = 95.0",
+            "output.locking_angle",
+        ),
+        (
+            "target step zero",
+            "target_time_step = 5e-6",
+            "target_time_step = 0.0",
+            "process.target_time_step",
+        ),
+        (
+            "pattern unknown",
+            "pattern = \"right\"",
+            "pattern = \"diagonal\"",
+            "blank.pattern",
+        ),
+        (
+            "too hot",
+            "temperature = 300.0",
+            "temperature = 400.0",
+            "process.temperature",
+        ),
+        (
+            "stroke beyond the punch",
+            "stroke = 30.0",
+            "stroke = 95.0",
+            "process.stroke",
+        ),
+        (
+            "holder force and gap",
+            "blank_holder_force = 200.0",
+            "blank_holder_force = 200.0\nblank_holder_gap = 0.1",
+            "blank_holder_gap",
+        ),
+        (
+            "coarse mesh",
+            "element_size = 8.0",
+            "element_size = 30.0",
+            "blank.element_size",
+        ),
+        (
+            "tool resolution zero",
+            "resolution = 3.0",
+            "resolution = 0.0",
+            "tools.resolution",
+        ),
+        (
+            "card missing",
+            "t300-5hs-pps.toml",
+            "t400.toml",
+            "t400.toml",
+        ),
+        ("card of wrong type", "card = ", "card = 3 #", "blank.card"),
+    ];
+    for (name, from, to, key) in edits {
+        let path = f.scenario(&format!("scenario-{}", name.replace(' ', "-")), from, to);
+        cases.push(Case {
+            name: format!("scenario {name}"),
+            args: run(&path, &[], &name.replace(' ', "-")),
+            code: 2,
+            names: vec![key.into()],
+        });
+    }
+    let garbage_card = f.file("garbage.toml", b"\x00\x01binary\xff");
+    let on_garbage = f.scenario_on_card("scenario-garbage-card", &garbage_card);
+    cases.push(Case {
+        name: "scenario on a garbage card".into(),
+        args: run(&on_garbage, &[], "garbage-card"),
+        code: 2,
+        names: vec![garbage_card],
+    });
+    let overrides: [(&str, &str, &str); 6] = [
+        ("set without value", "process.stroke", "--set"),
+        (
+            "set text for a number",
+            "process.stroke=abc",
+            "process.stroke",
+        ),
+        ("set a section", "process=3", "process"),
+        ("set unknown key", "process.strok=3", "strok"),
+        ("set empty key", "process..stroke=3", "--set"),
+        (
+            "set too hot",
+            "process.temperature=400",
+            "process.temperature",
+        ),
+    ];
+    for (name, assignment, key) in overrides {
+        cases.push(Case {
+            name: name.into(),
+            args: run(&example, &["--set", assignment], &name.replace(' ', "-")),
+            code: 2,
+            names: vec![key.into()],
+        });
+    }
+    let mesh_missing = f.file_blank("scenario-mesh-missing", "no-such-mesh.msh");
+    cases.push(Case {
+        name: "mesh file missing".into(),
+        args: run(&mesh_missing, &[], "mesh-missing"),
+        code: 2,
+        names: vec!["no-such-mesh.msh".into()],
+    });
+    let bad_mesh = f.file(
+        "bad.msh",
+        b"$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 2 1\n",
+    );
+    let on_bad_mesh = f.file_blank("scenario-bad-mesh", &bad_mesh);
+    cases.push(Case {
+        name: "mesh file truncated".into(),
+        args: run(&on_bad_mesh, &[], "bad-mesh"),
+        code: 2,
+        names: vec![bad_mesh, "line".into()],
+    });
+    let drape = |extra: &[&str], out: &str| {
+        let mut args = vec!["drape".to_string(), example.clone()];
+        args.extend(extra.iter().map(|s| s.to_string()));
+        args.extend(["--output".to_string(), f.output(out)]);
+        args
+    };
+    for (name, extra, piece) in [
+        ("drape start text", vec!["--start", "abc"], "--start"),
+        (
+            "drape start outside",
+            vec!["--start", "1000,1000"],
+            "--start",
+        ),
+        (
+            "drape warp angle nan",
+            vec!["--warp-angle", "nan"],
+            "--warp-angle",
+        ),
+    ] {
+        cases.push(Case {
+            name: name.into(),
+            args: drape(&extra, &name.replace(' ', "-")),
+            code: 2,
+            names: vec![piece.into()],
+        });
+    }
+    cases
+}
+
+/// Fits: manifests, curves and options.
+fn fit_cases(f: &Fixtures) -> Vec<Case> {
+    let card = repo("materials/t300-5hs-pps.toml");
+    let fabric = repo("materials/twintex-plain-weave.toml");
+    let benchmark = repo("examples/fit-shear/bias_extension_glass_pp_plain_150x450.csv");
+    let manifest = repo("examples/fit-matrix/manifest.toml");
+    let warp = repo("examples/fit-fabric-tension/warp.csv");
+    let out = |name: &str| {
+        f.dir
+            .join(format!("fitted-{name}.toml"))
+            .display()
+            .to_string()
+    };
+    let missing_curve = f.file(
+        "manifest-missing-curve.toml",
+        b"[[curve]]\nfile = \"no-such-curve.csv\"\ntemperature = 300.0\nstrain_rate = 1.0\n",
+    );
+    let manifest_text = f.file(
+        "manifest-text.toml",
+        b"[[curve]]\nfile = \"x.csv\"\ntemperature = \"hot\"\nstrain_rate = 1.0\n",
+    );
+    let negative = f.file(
+        "warp-negative.csv",
+        b"strain,force_per_width\n0,0\n0.001,5\n0.002,-3\n0.003,12\n",
+    );
+    let short = f.file("bias-short.csv", b"displacement_mm,force_N\n0,0\n");
+    let unsorted = f.file(
+        "bias-unsorted.csv",
+        b"displacement_mm,force_N\n0,0\n2,1\n1,2\n3,3\n4,4\n5,5\n",
+    );
+    let cases: Vec<(&str, Vec<String>, Vec<String>)> = vec![
+        (
+            "fit matrix manifest missing",
+            args(&[
+                "fit",
+                "matrix",
+                "--manifest",
+                "no-such.toml",
+                "--bulk-modulus",
+                "1000",
+                "--output",
+                &out("a"),
+            ]),
+            vec!["no-such.toml".into()],
+        ),
+        (
+            "fit matrix curve missing",
+            args(&[
+                "fit",
+                "matrix",
+                "--manifest",
+                &missing_curve,
+                "--bulk-modulus",
+                "1000",
+                "--output",
+                &out("b"),
+            ]),
+            vec!["no-such-curve.csv".into()],
+        ),
+        (
+            "fit matrix manifest text",
+            args(&[
+                "fit",
+                "matrix",
+                "--manifest",
+                &manifest_text,
+                "--bulk-modulus",
+                "1000",
+                "--output",
+                &out("c"),
+            ]),
+            vec![manifest_text.clone(), "temperature".into()],
+        ),
+        (
+            "fit matrix poisson above half",
+            args(&[
+                "fit",
+                "matrix",
+                "--manifest",
+                &manifest,
+                "--poisson",
+                "0.6",
+                "--output",
+                &out("d"),
+            ]),
+            vec!["--poisson".into()],
+        ),
+        (
+            "fit matrix negative bulk modulus",
+            args(&[
+                "fit",
+                "matrix",
+                "--manifest",
+                &manifest,
+                "--bulk-modulus",
+                "-5",
+                "--output",
+                &out("e"),
+            ]),
+            vec!["--bulk-modulus".into()],
+        ),
+        (
+            "fit tension negative force",
+            args(&[
+                "fit",
+                "fabric-tension",
+                "--warp",
+                &negative,
+                "--card",
+                &card,
+                "--output",
+                &out("f"),
+            ]),
+            vec![negative.clone(), "line".into()],
+        ),
+        (
+            "fit tension no curve",
+            args(&[
+                "fit",
+                "fabric-tension",
+                "--card",
+                &card,
+                "--output",
+                &out("g"),
+            ]),
+            vec!["--warp".into()],
+        ),
+        (
+            "fit tension zero terms",
+            args(&[
+                "fit",
+                "fabric-tension",
+                "--warp",
+                &warp,
+                "--card",
+                &card,
+                "--terms",
+                "0",
+                "--output",
+                &out("h"),
+            ]),
+            vec!["--terms".into()],
+        ),
+        (
+            "fit shear too few points",
+            args(&[
+                "fit",
+                "shear",
+                "--data",
+                &short,
+                "--width",
+                "150",
+                "--length",
+                "450",
+                "--card",
+                &fabric,
+                "--output",
+                &out("i"),
+            ]),
+            vec![short.clone()],
+        ),
+        (
+            "fit shear displacement backwards",
+            args(&[
+                "fit",
+                "shear",
+                "--data",
+                &unsorted,
+                "--width",
+                "150",
+                "--length",
+                "450",
+                "--card",
+                &fabric,
+                "--output",
+                &out("j"),
+            ]),
+            vec![unsorted.clone(), "line".into()],
+        ),
+        (
+            "fit shear specimen too short",
+            args(&[
+                "fit",
+                "shear",
+                "--data",
+                &benchmark,
+                "--width",
+                "150",
+                "--length",
+                "200",
+                "--card",
+                &fabric,
+                "--output",
+                &out("k"),
+            ]),
+            vec!["length/width".into()],
+        ),
+        (
+            "fit shear max shear 100",
+            args(&[
+                "fit",
+                "shear",
+                "--data",
+                &benchmark,
+                "--width",
+                "150",
+                "--length",
+                "450",
+                "--card",
+                &fabric,
+                "--max-shear",
+                "100",
+                "--output",
+                &out("l"),
+            ]),
+            vec!["--max-shear".into()],
+        ),
+        (
+            "fit shear prepreg without conditions",
+            args(&[
+                "fit",
+                "shear",
+                "--data",
+                &benchmark,
+                "--width",
+                "150",
+                "--length",
+                "450",
+                "--card",
+                &card,
+                "--output",
+                &out("m"),
+            ]),
+            vec!["--temperature".into()],
+        ),
+        (
+            "fit shear output folder missing",
+            args(&[
+                "fit",
+                "shear",
+                "--data",
+                &benchmark,
+                "--width",
+                "150",
+                "--length",
+                "450",
+                "--card",
+                &fabric,
+                "--output",
+                "/no/such/folder/card.toml",
+            ]),
+            vec!["/no/such/folder/card.toml".into()],
+        ),
+    ];
+    cases
+        .into_iter()
+        .map(|(name, args, names)| Case {
+            name: name.into(),
+            args,
+            code: 2,
+            names,
+        })
+        .collect()
+}
+
+fn args(list: &[&str]) -> Vec<String> {
+    list.iter().map(|s| s.to_string()).collect()
+}
+
+/// Longest a refused invocation may take: it is refused before any step.
+const REFUSAL_TIME: Duration = Duration::from_secs(30);
+
+fn check(case: &Case) -> Result<(), String> {
+    let args: Vec<&str> = case.args.iter().map(String::as_str).collect();
+    let start = Instant::now();
+    let out = thermostamp(&args);
+    let elapsed = start.elapsed();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let code = out.status.code();
+    let mut problems = Vec::new();
+    if code != Some(case.code) {
+        problems.push(format!("exit code {code:?}, expected {}", case.code));
+    }
+    if code == Some(101) || stderr.contains("panicked") {
+        problems.push("panicked".into());
+    }
+    for piece in &case.names {
+        if !stderr.contains(piece.as_str()) {
+            problems.push(format!("'{piece}' not named"));
+        }
+    }
+    let errors: Vec<&str> = stderr.lines().filter(|l| l.starts_with("error")).collect();
+    if case.code == 2 && !case.args.is_empty() && errors.len() != 1 {
+        problems.push(format!("{} error lines", errors.len()));
+    }
+    if stderr.chars().filter(char::is_ascii_digit).count() > 0 && has_long_number(&stderr) {
+        problems.push("a number printed with too many digits".into());
+    }
+    if elapsed > REFUSAL_TIME {
+        problems.push(format!("took {elapsed:?}"));
+    }
+    if problems.is_empty() {
+        Ok(())
+    } else {
+        Err(format!(
+            "{}: {}\n    {}",
+            case.name,
+            problems.join(", "),
+            stderr.trim()
+        ))
+    }
+}
+
+/// A run of more than 20 digits (a float printed in full).
+fn has_long_number(text: &str) -> bool {
+    let mut run = 0;
+    for c in text.chars() {
+        run = if c.is_ascii_digit() { run + 1 } else { 0 };
+        if run > 20 {
+            return true;
+        }
+    }
+    false
+}
+
+fn all_cases(f: &Fixtures) -> Vec<Case> {
+    let mut cases = usage_cases(f);
+    cases.extend(material_point_cases(f));
+    cases.extend(virtual_test_cases(f));
+    cases.extend(scenario_cases(f));
+    cases.extend(fit_cases(f));
+    cases
+}
+
+#[test]
+fn every_bad_input_is_refused_with_exit_2_naming_its_source() {
+    let fixtures = Fixtures::new();
+    let cases = all_cases(&fixtures);
+    assert!(cases.len() >= 60, "only {} cases", cases.len());
+    let failures: Vec<String> = cases.iter().filter_map(|c| check(c).err()).collect();
+    assert!(
+        failures.is_empty(),
+        "{} of {} cases failed:\n{}",
+        failures.len(),
+        cases.len(),
+        failures.join("\n")
+    );
+}
+
+#[test]
+fn refused_runs_write_no_output_folder() {
+    let fixtures = Fixtures::new();
+    let out = fixtures.output("refused-run");
+    let _ = std::fs::remove_dir_all(&out);
+    let scenario = fixtures.scenario("refused-hot", "temperature = 300.0", "temperature = 400.0");
+    let result = thermostamp(&["run", &scenario, "--output", &out]);
+    assert_eq!(result.status.code(), Some(2));
+    assert!(
+        !Path::new(&out).exists(),
+        "{out} was created by a refused run"
+    );
+}
