@@ -1,4 +1,4 @@
-//! `thermostamp fit ...`: parameter identification from test curves (MODEL.md §5):
+//! `thermostamp fit ...`: parameter identification from test curves (docs/model.md §5):
 //! `fit matrix` and `fit shear` here, `fit fabric-tension` in `fit_fabric_tension.rs`.
 
 use crate::fit::card_key::{replace_key, toml_array, FIT_MARKER};
@@ -36,7 +36,7 @@ pub enum ShearTestKind {
 #[command(
     after_help = "CSV columns: displacement_mm (crosshead, increasing), force_N (>= 0).\n\
     Bias extension (default): --width W --length H (free length, H/W >= 2); the normalised\n\
-    shear force of Cao et al. 2008 is solved recursively from small angles (MODEL.md §5).\n\
+    shear force of Cao et al. 2008 is solved recursively from small angles (docs/model.md §5).\n\
     Picture frame: --frame-side L (pin to pin) [--fabric-side, default L].\n\
     Model: F_sh(gamma) = 2 t_B sin(gamma) W_s'(sin^2 gamma), W_s = sum_k c_k I10^k.\n\
     A card with matrix layers (a prepreg) needs --temperature and --speed of the test: the\n\
@@ -316,7 +316,7 @@ fn refined_plot(refined: &ShearFeFit) -> LinePlot {
     }
 }
 
-/// The fabric's part of a prepreg's curve and the matrix layers' part (MODEL.md §5).
+/// The fabric's part of a prepreg's curve and the matrix layers' part (docs/model.md §5).
 struct MatrixShare {
     fabric: ForceCurve,
     force: Vec<f64>,
@@ -433,7 +433,7 @@ fn shear_provenance(args: &ShearArgs, fit: &ShearFit, matrix: Option<&MatrixShar
         .map(|e| format!("{e:.2e}"))
         .collect();
     let mut lines = vec![format!(
-        "{FIT_MARKER} shear` (MODEL.md §5) to {} ({test}), {} points up to {}° of shear.",
+        "{FIT_MARKER} shear` (docs/model.md §5) to {} ({test}), {} points up to {}° of shear.",
         args.data.display(),
         fit.points.len(),
         args.max_shear
@@ -587,7 +587,7 @@ fn provenance(args: &MatrixArgs, curves: &[TensionCurve], bulk: &BulkRule) -> Ve
     };
     vec![
         format!(
-            "Fitted by `thermostamp fit matrix` (MODEL.md §5) to {} curves of {}.",
+            "Fitted by `thermostamp fit matrix` (docs/model.md §5) to {} curves of {}.",
             curves.len(),
             args.manifest.display()
         ),
@@ -648,7 +648,7 @@ fn comparison_plot(curves: &[TensionCurve], fits: &[TemperatureFit]) -> LinePlot
         }
     }
     LinePlot {
-        title: "fit matrix: data (dots), model of MODEL.md §5 (lines)".into(),
+        title: "fit matrix: data (dots), model of docs/model.md §5 (lines)".into(),
         x_label: "stretch".into(),
         y_label: "true stress (MPa)".into(),
         series,

@@ -19,7 +19,7 @@ use std::path::{Path, PathBuf};
 
 #[derive(clap::Subcommand, Debug)]
 pub enum TestCommand {
-    /// Bias-extension test: ±45° specimen clamped at both ends and pulled (MODEL.md §5).
+    /// Bias-extension test: ±45° specimen clamped at both ends and pulled (docs/model.md §5).
     BiasExtension(BiasArgs),
     /// Uniaxial (strip) tension test: bottom edge clamped, top edge pulled, yarns at any angle.
     Uniaxial(UniaxialArgs),
@@ -39,7 +39,7 @@ pub struct CommonArgs {
     /// Physical crosshead speed (mm/s); 0.333 mm/s is 20 mm/min.
     #[arg(long, allow_negative_numbers = true)]
     speed: Option<f64>,
-    /// Run the process this many times faster, with eta1 divided by it (MODEL.md §6).
+    /// Run the process this many times faster, with eta1 divided by it (docs/model.md §6).
     #[arg(long, allow_negative_numbers = true)]
     time_scaling: Option<f64>,
     /// Mass scaling to this time step (s); 0 for none.
