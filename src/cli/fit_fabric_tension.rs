@@ -18,10 +18,12 @@ use std::path::{Path, PathBuf};
     t_B the card's fabric_thickness; points with lambda <= 1 are not fitted."
 )]
 pub struct FabricTensionArgs {
-    /// Strip test pulled along the warp (CSV).
+    /// Strip test pulled along the warp (CSV); at least one of --warp, --weft is required, and
+    /// a direction not given keeps its coefficients from the card (the default).
     #[arg(long)]
     warp: Option<PathBuf>,
-    /// Strip test pulled along the weft (CSV).
+    /// Strip test pulled along the weft (CSV); at least one of --warp, --weft is required, and
+    /// a direction not given keeps its coefficients from the card (the default).
     #[arg(long)]
     weft: Option<PathBuf>,
     /// Material card whose [fabric] warp_tension / weft_tension are replaced (the rest is kept
@@ -34,10 +36,11 @@ pub struct FabricTensionArgs {
     /// Number of coefficients A_2.. to fit; default: as many as the card has.
     #[arg(long)]
     terms: Option<usize>,
-    /// Specimen width (mm), for CSV files with a force column (N).
+    /// Specimen width (mm), for CSV files with a force column (N); no default: needed for such
+    /// files only.
     #[arg(long)]
     width: Option<f64>,
-    /// PNG comparing the data with the fitted model.
+    /// PNG comparing the data with the fitted model (default: no plot).
     #[arg(long)]
     plot: Option<PathBuf>,
 }
