@@ -95,7 +95,11 @@ fn nothing_cites_a_file_outside_the_repository() {
 #[test]
 fn every_cited_section_of_the_model_exists() {
     let sections = model_sections();
-    assert_eq!(sections, (1..=8).collect::<Vec<_>>(), "docs/model.md sections");
+    assert_eq!(
+        sections,
+        (1..=8).collect::<Vec<_>>(),
+        "docs/model.md sections"
+    );
     let mut citations = 0;
     for (path, text) in all_text() {
         for n in cited_sections(&text) {
