@@ -65,7 +65,7 @@ fn main() {
 
     println!("material-point evaluation, ns per call (1 thread):");
     println!("  matrix layer S (Eqs. 8-9)            {matrix_ns:8.1}");
-    println!("  fabric layer S (MODEL.md §3)         {fabric_ns:8.1}");
+    println!("  fabric layer S (docs/model.md §3)         {fabric_ns:8.1}");
     println!("  A:B:A laminate N, plane stress       {laminate_ns:8.1}");
     println!("  the same, laws pinned at T           {isothermal_ns:8.1}");
 }

@@ -1,5 +1,5 @@
 //! thermostamp — thermo-stamping simulation of woven-fabric-reinforced thermoplastic prepregs
-//! with the lamination model of Gong et al., Composite Structures 2018 (see `MODEL.md`).
+//! with the lamination model of Gong et al., Composite Structures 2018 (see `docs/model.md`).
 //!
 //! Units everywhere: mm, N, s, MPa, tonne/mm^3, °C.
 //!

@@ -1,4 +1,4 @@
-//! Bending of the sheet by discrete hinges (MODEL.md §4): the energy of a sheet rolled onto a
+//! Bending of the sheet by discrete hinges (docs/model.md §4): the energy of a sheet rolled onto a
 //! cylinder against `B / (2 R^2)` per unit area, warp and weft rigidities, and the Euler
 //! buckling load of a compressed strip.
 

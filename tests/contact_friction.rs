@@ -1,5 +1,5 @@
-//! Penalty contact with Coulomb friction (MODEL.md §6) against its definition: a blank squeezed
-//! between two flat plates and pulled across them needs a force equal to the friction
+//! Penalty contact with Coulomb friction (docs/model.md §6) against its definition: a blank
+//! squeezed between two flat plates and pulled across them needs a force equal to the friction
 //! coefficient times the normal force, and no node sinks into a plate deeper than 10 % of the
 //! ply thickness.
 

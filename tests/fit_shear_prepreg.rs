@@ -1,4 +1,4 @@
-//! `fit shear` on a prepreg (issue 5, MODEL.md §5): the matrix layers' share of a shear test's
+//! `fit shear` on a prepreg (issue 5, docs/model.md §5): the matrix layers' share of a shear test's
 //! force is subtracted before the fabric's law is fitted.
 //!
 //! The data are made by the FE picture-frame test (`experiment::picture_frame`), whose sheet

@@ -1,4 +1,4 @@
-//! `fit shear` round trips (MODEL.md §5): bias-extension curves made from known `c_k` by the
+//! `fit shear` round trips (docs/model.md §5): bias-extension curves made from known `c_k` by the
 //! forward form of Cao's normalisation (`fit::synthetic::bias_extension_curve`) give the
 //! coefficients back — within 1 % without noise, within two reported standard errors with 2 %
 //! multiplicative noise on the force.
@@ -88,7 +88,7 @@ fn standard_errors_cover_the_truth_over_many_seeds() {
     assert!(share > 0.8, "{inside} of {total}");
 }
 
-/// Picture frame (MODEL.md §5): a curve made from the law by the frame's kinematics,
+/// Picture frame (docs/model.md §5): a curve made from the law by the frame's kinematics,
 /// `theta = arccos((sqrt 2 L + d) / (2 L))`, `gamma = 90° - 2 theta`, and its force,
 /// `F = 2 cos(theta) F_sh(gamma) L_fabric^2 / L_frame`, gives the coefficients back within 1 %.
 #[test]

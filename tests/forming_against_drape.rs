@@ -1,4 +1,4 @@
-//! Forming over the hemisphere and the double dome against kinematics (MODEL.md §6): a fabric
+//! Forming over the hemisphere and the double dome against kinematics (docs/model.md §6): a fabric
 //! of stiff yarns and soft shear, 0/90, drapes with the symmetry of its net (four-fold on the
 //! hemisphere, the two mirror planes on the double dome), its largest shear angle is that of
 //! the pin-jointed net on the same punch, it stays out of the tools, and the run is

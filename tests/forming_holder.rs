@@ -1,5 +1,6 @@
-//! The blank holder against wrinkling of the flange (MODEL.md §6): without a blank-holder force
-//! the flange leaves the die in waves as the punch draws the blank in; with one it stays flat.
+//! The blank holder against wrinkling of the flange (docs/model.md §6): without a blank-holder
+//! force the flange leaves the die in waves as the punch draws the blank in; with one it stays
+//! flat.
 
 mod common;
 

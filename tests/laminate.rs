@@ -1,4 +1,4 @@
-//! Checks of the A:B:A laminate (MODEL.md §4): plane stress in every layer, thickness,
+//! Checks of the A:B:A laminate (docs/model.md §4): plane stress in every layer, thickness,
 //! membrane resultant as the derivative of the stored energy, objectivity, rate effect.
 
 mod common;
@@ -65,7 +65,7 @@ proptest! {
         prop_assert!(residual < 1e-8, "|S33| / in-plane = {residual:e}");
     }
 
-    /// MODEL.md §4: with plane stress the membrane resultant is the derivative of the stored
+    /// docs/model.md §4: with plane stress the membrane resultant is the derivative of the stored
     /// energy per unit area, N = 2 d(sum t_k W_k)/dC2 (elastic: at rest, no step duration).
     #[test]
     fn membrane_resultant_is_twice_the_energy_gradient(f in in_plane_gradient(), angle in 0.0..3.2f64) {
@@ -87,7 +87,7 @@ proptest! {
         prop_assert!(relative_difference(&n3, &n_fd, n.amax().max(1e-3)) < 1e-5, "{n} vs {n_fd}");
     }
 
-    /// MODEL.md §7.2 for the laminate: a rigid (and spinning) rotation of the sheet in 3D
+    /// docs/model.md §7.2 for the laminate: a rigid (and spinning) rotation of the sheet in 3D
     /// changes neither N nor the thickness.
     #[test]
     fn laminate_is_objective(
@@ -166,7 +166,7 @@ fn thickness_shrinks_under_equibiaxial_stretch() {
 
 /// The same simple shear reached faster gives a larger resultant, by exactly the viscous
 /// stress of the two matrix layers: dN12 = 2 t_A S_v12, S_v12 = 2 eta1 (I1 - 3) Cdot12 with
-/// I1 - 3 = g^2 (det C2 = 1, so lambda3 = 1) and Cdot12 = gdot (seed Eq. (9)).
+/// I1 - 3 = g^2 (det C2 = 1, so lambda3 = 1) and Cdot12 = gdot (Eq. (9) of Gong et al. 2018).
 #[test]
 fn faster_shearing_adds_the_matrix_viscous_stress() {
     let card = t300_card();

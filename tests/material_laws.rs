@@ -1,4 +1,4 @@
-//! Checks of the layer laws against physics (MODEL.md §7): stress as the derivative of the
+//! Checks of the layer laws against physics (docs/model.md §7): stress as the derivative of the
 //! energy, objectivity, rest state, symmetry, and closed-form responses.
 
 mod common;
@@ -38,7 +38,8 @@ fn point(f: &Matrix3<f64>, f_dot: &Matrix3<f64>, fibres: FibreDirections) -> Poi
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(300))]
 
-    /// MODEL.md §7.1, matrix: S_e = 2 dW_e/dC and S_v = 2 dpsi_v/dCdot (seed Eqs. (5)–(9)).
+    /// docs/model.md §7.1, matrix: S_e = 2 dW_e/dC and S_v = 2 dpsi_v/dCdot (Eqs. (5)–(9) of Gong
+    /// et al. 2018).
     #[test]
     fn matrix_stress_is_twice_the_energy_gradient(f in deformation_gradient(), f_dot in deformation_rate()) {
         let card = t300_card();
@@ -57,7 +58,7 @@ proptest! {
         prop_assert!(relative_difference(&s_v, &s_v_fd, s_v.amax().max(1e-9)) < 1e-6, "S_v {s_v} vs {s_v_fd}");
     }
 
-    /// MODEL.md §7.1, fabric, including large shear (|gamma| up to 60°) and compressed yarns.
+    /// docs/model.md §7.1, fabric, including large shear (|gamma| up to 60°) and compressed yarns.
     #[test]
     fn fabric_stress_is_twice_the_energy_gradient(
         gamma in -60.0..60.0f64,
@@ -80,7 +81,8 @@ proptest! {
         prop_assert!((measured - gamma).abs() < 1e-9, "shear angle {measured} vs {gamma}");
     }
 
-    /// MODEL.md §7.2: F -> R F leaves S unchanged, also under a spinning R (Cdot is objective).
+    /// docs/model.md §7.2: F -> R F leaves S unchanged, also under a spinning R (Cdot is
+    /// objective).
     #[test]
     fn both_layers_are_objective(
         f in deformation_gradient(),
@@ -118,7 +120,7 @@ proptest! {
     }
 }
 
-/// MODEL.md §7.3: no stress in the undeformed state at rest, at every table temperature.
+/// docs/model.md §7.3: no stress in the undeformed state at rest, at every table temperature.
 #[test]
 fn no_stress_at_rest() {
     let card = t300_card();
@@ -135,14 +137,14 @@ fn no_stress_at_rest() {
     }
 }
 
-/// The closed form of MODEL.md §5 for incompressible uniaxial tension:
+/// The closed form of docs/model.md §5 for incompressible uniaxial tension:
 /// sigma11 = 2 C10 (l^2 - 1/l) + 2 eta1 (l^2 + 2/l - 3)(2 l^3 + l^-3) ldot.
 fn uniaxial_closed_form(c10: f64, eta1: f64, l: f64, l_dot: f64) -> f64 {
     2.0 * c10 * (l * l - 1.0 / l)
         + 2.0 * eta1 * (l * l + 2.0 / l - 3.0) * (2.0 * l.powi(3) + l.powi(-3)) * l_dot
 }
 
-/// MODEL.md §7.4, exact kinematics: for an isochoric stretch the pressure-free difference
+/// docs/model.md §7.4, exact kinematics: for an isochoric stretch the pressure-free difference
 /// sigma11 - sigma22 is the closed form, whatever D1.
 #[test]
 fn matrix_isochoric_stretch_matches_the_closed_form() {
@@ -174,7 +176,7 @@ fn matrix_isochoric_stretch_matches_the_closed_form() {
     }
 }
 
-/// MODEL.md §7.4, uniaxial stress: lateral stretches solved for S22 = S33 = 0 with a small D1
+/// docs/model.md §7.4, uniaxial stress: lateral stretches solved for S22 = S33 = 0 with a small D1
 /// converge to the incompressible closed form, elastic and viscous.
 #[test]
 fn matrix_uniaxial_stress_with_small_d1_matches_the_closed_form() {
@@ -245,7 +247,7 @@ fn driver_rates_are_exact_for_linear_histories() {
     }
 }
 
-/// MODEL.md §7.5: pure shear of the fabric layer, F_sh = 2 t_B sin(gamma) W_s'(sin^2 gamma),
+/// docs/model.md §7.5: pure shear of the fabric layer, F_sh = 2 t_B sin(gamma) W_s'(sin^2 gamma),
 /// from the stress and from the energy along the shear path, up to 60°.
 #[test]
 fn fabric_pure_shear_matches_the_normalised_shear_force() {
@@ -291,7 +293,7 @@ fn fabric_pure_shear_matches_the_normalised_shear_force() {
     }
 }
 
-/// MODEL.md §7.6: tension along the warp only activates the warp term, at any fibre angle.
+/// docs/model.md §7.6: tension along the warp only activates the warp term, at any fibre angle.
 #[test]
 fn fabric_tension_along_the_warp_activates_only_the_warp() {
     let fabric = unbalanced_fabric();

@@ -1,4 +1,4 @@
-//! The virtual bias-extension test against physics (MODEL.md §5): the central-zone shear angle
+//! The virtual bias-extension test against physics (docs/model.md §5): the central-zone shear angle
 //! and the clamp force of the equilibrium of an inextensible net (`experiment::ideal_net`),
 //! three kinematic zones, energy balance, quasi-static kinetic energy, the normalised shear
 //! force recovered from the simulated force curve equal to the fabric's own shear law, and

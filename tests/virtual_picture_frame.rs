@@ -1,8 +1,8 @@
-//! The virtual picture-frame test against physics (MODEL.md §5): the sheet inside the
+//! The virtual picture-frame test against physics (docs/model.md §5): the sheet inside the
 //! pin-jointed frame shears homogeneously with the frame's angle; the crosshead force from the
 //! reaction power integrates to the external work and normalises to the fabric's own shear law;
-//! the energy balances; and with a viscous matrix (MODEL.md §2) a faster test needs more force,
-//! while time scaling (MODEL.md §6: speed x s, eta1 / s) gives back the unscaled force.
+//! the energy balances; and with a viscous matrix (docs/model.md §2) a faster test needs more
+//! force, while time scaling (docs/model.md §6: speed x s, eta1 / s) gives back the unscaled force.
 
 mod common;
 
@@ -156,7 +156,7 @@ fn assert_quasi_static(name: &str, result: &PictureFrameRun) {
 ///   step must stay below the viscous limit, which a lighter sheet would break, see the card);
 /// - fast: the same at 50 mm/s: the force is clearly higher, and its viscous part (the force
 ///   minus that of the same frame with eta1 -> 0) ten times the slow one's, as the viscous
-///   stress `2 eta1 (I1 - 3) Cdot` of MODEL.md §2 is linear in the rate;
+///   stress `2 eta1 (I1 - 3) Cdot` of docs/model.md §2 is linear in the rate;
 /// - time-scaled: the slow test run ten times faster with eta1 / 10, mass-scaled to a 1e-4 s
 ///   step (four times the mass of the exactly similar run, whose dynamics would be identical):
 ///   it must give the slow test's force back within 3 %.

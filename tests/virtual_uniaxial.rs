@@ -1,5 +1,5 @@
 //! The virtual strip tension test against physics: along a yarn family the force per unit width
-//! is the card's yarn tension law times the fabric thickness (MODEL.md §3, §5), for a linear
+//! is the card's yarn tension law times the fabric thickness (docs/model.md §3, §5), for a linear
 //! and a nonlinear law; the energy balances; the weft strip of a balanced fabric gives the warp
 //! strip's curve; a bias strip is shear-dominated, far softer, and carries the force of Cao's
 //! bias-extension energy balance.

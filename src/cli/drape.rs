@@ -10,6 +10,7 @@ use anyhow::Context;
 use std::path::{Path, PathBuf};
 
 #[derive(clap::Args, Debug)]
+#[command(after_help = super::shared::SCENARIO_REFERENCE)]
 pub struct Args {
     #[command(flatten)]
     scenario: ScenarioArgs,

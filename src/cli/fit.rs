@@ -1,4 +1,4 @@
-//! `thermostamp fit ...`: parameter identification from test curves (MODEL.md §5):
+//! `thermostamp fit ...`: parameter identification from test curves (docs/model.md §5):
 //! `fit matrix` and `fit shear` here, `fit fabric-tension` in `fit_fabric_tension.rs`.
 
 use crate::fit::card_key::{replace_key, toml_array, FIT_MARKER};
@@ -36,7 +36,7 @@ pub enum ShearTestKind {
 #[command(
     after_help = "CSV columns: displacement_mm (crosshead, increasing), force_N (>= 0).\n\
     Bias extension (default): --width W --length H (free length, H/W >= 2); the normalised\n\
-    shear force of Cao et al. 2008 is solved recursively from small angles (MODEL.md §5).\n\
+    shear force of Cao et al. 2008 is solved recursively from small angles (docs/model.md §5).\n\
     Picture frame: --frame-side L (pin to pin) [--fabric-side, default L].\n\
     Model: F_sh(gamma) = 2 t_B sin(gamma) W_s'(sin^2 gamma), W_s = sum_k c_k I10^k.\n\
     A card with matrix layers (a prepreg) needs --temperature and --speed of the test: the\n\
@@ -49,15 +49,17 @@ pub struct ShearArgs {
     /// Force–displacement curve (CSV).
     #[arg(long)]
     data: PathBuf,
+    /// The test the curve comes from.
     #[arg(long, value_enum, default_value = "bias-extension")]
     test: ShearTestKind,
-    /// Bias extension: specimen width W (mm).
+    /// Bias extension: specimen width W (mm); no default, required for a bias extension.
     #[arg(long, allow_negative_numbers = true)]
     width: Option<f64>,
-    /// Bias extension: free length H between the clamps (mm).
+    /// Bias extension: free length H between the clamps (mm); no default, required for a bias
+    /// extension.
     #[arg(long, allow_negative_numbers = true)]
     length: Option<f64>,
-    /// Picture frame: frame side, pin to pin (mm).
+    /// Picture frame: frame side, pin to pin (mm); no default, required for a picture frame.
     #[arg(long, allow_negative_numbers = true)]
     frame_side: Option<f64>,
     /// Picture frame: side of the sheared fabric square (mm); default the frame side.
@@ -69,10 +71,10 @@ pub struct ShearArgs {
     /// Where to write the card (may be the same file as --card).
     #[arg(long)]
     output: PathBuf,
-    /// Temperature of the test (°C); needed when the card has matrix layers.
+    /// Temperature of the test (°C); no default: needed when the card has matrix layers.
     #[arg(long, allow_negative_numbers = true)]
     temperature: Option<f64>,
-    /// Crosshead speed of the test (mm/s); needed when the card has matrix layers.
+    /// Crosshead speed of the test (mm/s); no default: needed when the card has matrix layers.
     #[arg(long, allow_negative_numbers = true)]
     speed: Option<f64>,
     /// Number of coefficients c_1..c_m.
@@ -82,11 +84,12 @@ pub struct ShearArgs {
     #[arg(long, allow_negative_numbers = true, default_value_t = 50.0)]
     max_shear: f64,
     /// PNG of the normalised shear force vs shear angle: data (dots) and model (line); with
-    /// --refine-fe, of the crosshead force: data (dots) and the final FE run (line).
+    /// --refine-fe, of the crosshead force: data (dots) and the final FE run (line). Default:
+    /// no plot.
     #[arg(long)]
     plot: Option<PathBuf>,
     /// Refine the coefficients by running the FE bias-extension test inside the fit loop, on
-    /// the measured force curve (bias extension only).
+    /// the measured force curve (bias extension only; default: off, the analytic fit).
     #[arg(long)]
     refine_fe: bool,
     /// --refine-fe: cell size of the FE specimen (mm); default W/6.
@@ -114,19 +117,21 @@ pub struct MatrixArgs {
     #[arg(long)]
     manifest: PathBuf,
     /// Material card whose [matrix] section is replaced (the rest is kept as it is); without
-    /// it the output holds the [matrix] section only.
+    /// it (the default) the output holds the [matrix] section only.
     #[arg(long)]
     card: Option<PathBuf>,
     /// Where to write the card (may be the same file as --card).
     #[arg(long)]
     output: PathBuf,
-    /// Bulk modulus K of the resin (MPa): D1 = 2/K at every temperature.
+    /// Bulk modulus K of the resin (MPa): D1 = 2/K at every temperature. Default, with neither
+    /// this nor --poisson: D1 kept from --card.
     #[arg(long, allow_negative_numbers = true, conflicts_with = "poisson")]
     bulk_modulus: Option<f64>,
     /// Poisson ratio of the resin: D1 from K = 2 G (1 + nu) / (3 (1 - 2 nu)), G = 2 C10(T).
+    /// Default, with neither this nor --bulk-modulus: D1 kept from --card.
     #[arg(long, allow_negative_numbers = true)]
     poisson: Option<f64>,
-    /// PNG comparing the data with the fitted model.
+    /// PNG comparing the data with the fitted model (default: no plot).
     #[arg(long)]
     plot: Option<PathBuf>,
 }
@@ -316,7 +321,7 @@ fn refined_plot(refined: &ShearFeFit) -> LinePlot {
     }
 }
 
-/// The fabric's part of a prepreg's curve and the matrix layers' part (MODEL.md §5).
+/// The fabric's part of a prepreg's curve and the matrix layers' part (docs/model.md §5).
 struct MatrixShare {
     fabric: ForceCurve,
     force: Vec<f64>,
@@ -433,7 +438,7 @@ fn shear_provenance(args: &ShearArgs, fit: &ShearFit, matrix: Option<&MatrixShar
         .map(|e| format!("{e:.2e}"))
         .collect();
     let mut lines = vec![format!(
-        "{FIT_MARKER} shear` (MODEL.md §5) to {} ({test}), {} points up to {}° of shear.",
+        "{FIT_MARKER} shear` (docs/model.md §5) to {} ({test}), {} points up to {}° of shear.",
         args.data.display(),
         fit.points.len(),
         args.max_shear
@@ -587,7 +592,7 @@ fn provenance(args: &MatrixArgs, curves: &[TensionCurve], bulk: &BulkRule) -> Ve
     };
     vec![
         format!(
-            "Fitted by `thermostamp fit matrix` (MODEL.md §5) to {} curves of {}.",
+            "Fitted by `thermostamp fit matrix` (docs/model.md §5) to {} curves of {}.",
             curves.len(),
             args.manifest.display()
         ),
@@ -648,7 +653,7 @@ fn comparison_plot(curves: &[TensionCurve], fits: &[TemperatureFit]) -> LinePlot
         }
     }
     LinePlot {
-        title: "fit matrix: data (dots), model of MODEL.md §5 (lines)".into(),
+        title: "fit matrix: data (dots), model of docs/model.md §5 (lines)".into(),
         x_label: "stretch".into(),
         y_label: "true stress (MPa)".into(),
         series,

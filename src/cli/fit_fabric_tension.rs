@@ -1,5 +1,5 @@
 //! `thermostamp fit fabric-tension`: the yarn tension coefficients `A_k` of a card's `[fabric]`
-//! from strip tension tests along warp and weft (MODEL.md §3, §5).
+//! from strip tension tests along warp and weft (docs/model.md §3, §5).
 
 use crate::fit::card_key::{replace_key, toml_array, FIT_MARKER};
 use crate::fit::fabric_tension::{fit_yarn_tension, strip_force_per_width, TensionFit};
@@ -13,15 +13,17 @@ use std::path::{Path, PathBuf};
 #[command(
     group = clap::ArgGroup::new("direction").required(true).multiple(true).args(["warp", "weft"]),
     after_help = "CSV columns: strain (engineering) or stretch, and force_per_width (N/mm) or\n\
-    force (N, divided by --width). Model (MODEL.md §5): force per width\n  \
+    force (N, divided by --width). Model (docs/model.md §5): force per width\n  \
     N(lambda) = t_B sum_{k=2..n} A_k (lambda - 1)^(k-1),\n\
     t_B the card's fabric_thickness; points with lambda <= 1 are not fitted."
 )]
 pub struct FabricTensionArgs {
-    /// Strip test pulled along the warp (CSV).
+    /// Strip test pulled along the warp (CSV); at least one of --warp, --weft is required, and
+    /// a direction not given keeps its coefficients from the card (the default).
     #[arg(long)]
     warp: Option<PathBuf>,
-    /// Strip test pulled along the weft (CSV).
+    /// Strip test pulled along the weft (CSV); at least one of --warp, --weft is required, and
+    /// a direction not given keeps its coefficients from the card (the default).
     #[arg(long)]
     weft: Option<PathBuf>,
     /// Material card whose [fabric] warp_tension / weft_tension are replaced (the rest is kept
@@ -34,10 +36,11 @@ pub struct FabricTensionArgs {
     /// Number of coefficients A_2.. to fit; default: as many as the card has.
     #[arg(long)]
     terms: Option<usize>,
-    /// Specimen width (mm), for CSV files with a force column (N).
+    /// Specimen width (mm), for CSV files with a force column (N); no default: needed for such
+    /// files only.
     #[arg(long, allow_negative_numbers = true)]
     width: Option<f64>,
-    /// PNG comparing the data with the fitted model.
+    /// PNG comparing the data with the fitted model (default: no plot).
     #[arg(long)]
     plot: Option<PathBuf>,
 }
@@ -103,7 +106,7 @@ fn fabric_thickness(card: &MaterialCard) -> anyhow::Result<f64> {
 /// replaces it.
 fn provenance(d: &DirectionFit, thickness: f64) -> Vec<String> {
     vec![format!(
-        "{FIT_MARKER} fabric-tension` (MODEL.md §5, t_B = {thickness} mm) to {} points of {}: \
+        "{FIT_MARKER} fabric-tension` (docs/model.md §5, t_B = {thickness} mm) to {} points of {}: \
          standard errors [{}] MPa, RMS residual {:.3e} N/mm.",
         d.fit.points,
         Path::new(&d.curve.origin).display(),
@@ -172,7 +175,7 @@ fn comparison_plot(fits: &[DirectionFit], thickness: f64) -> LinePlot {
         series.push(Series::new(label, model, LineStyle::Solid).with_colour(colour));
     }
     LinePlot {
-        title: "fit fabric-tension: data (dots), model of MODEL.md §5 (lines)".into(),
+        title: "fit fabric-tension: data (dots), model of docs/model.md §5 (lines)".into(),
         x_label: "strain (%)".into(),
         y_label: "force per width (N/mm)".into(),
         series,

@@ -32,7 +32,7 @@ pub struct Args {
     /// Warp direction, degrees from x in the x–y plane (weft 90° further on).
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     angle: f64,
-    /// Write the CSV here instead of standard output.
+    /// Write the CSV here (default: standard output).
     #[arg(long)]
     output: Option<PathBuf>,
 }

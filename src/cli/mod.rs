@@ -40,7 +40,8 @@ enum Command {
     Run(forming_run::Args),
     /// Kinematic draping preview of a scenario: the pin-jointed net on the formed punch.
     Drape(drape::Args),
-    /// Parameter identification from test curves (MODEL.md §5): `fit matrix`, `fit shear`.
+    /// Parameter identification from test curves (docs/model.md §5): `fit matrix`,
+    /// `fit fabric-tension`, `fit shear`.
     #[command(subcommand)]
     Fit(fit::FitCommand),
 }

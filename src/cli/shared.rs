@@ -6,6 +6,12 @@ use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
 
+/// Where `thermostamp run --help` and `drape --help` send the reader for the scenario keys.
+pub const SCENARIO_REFERENCE: &str =
+    "Scenario file: every key, its unit and its default are listed in docs/forming.md,\n\
+     section \"Scenario file\". Tutorials: examples/hemisphere.toml, examples/double-dome.toml,\n\
+     examples/hemisphere-quarter.toml.";
+
 /// Runs `job` on `threads` worker threads (default: all cores).
 pub fn with_threads(
     threads: Option<usize>,
@@ -70,10 +76,11 @@ pub fn print_table(rows: &[(&str, String)], files: &[PathBuf]) {
 pub struct ScenarioArgs {
     /// Scenario file (TOML): blank, tools, process, output.
     scenario: PathBuf,
-    /// Override a scalar of the scenario, e.g. --set process.temperature=310 (repeatable).
+    /// Override a scalar of the scenario, e.g. --set process.temperature=310 (repeatable;
+    /// default: none, the file as written).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     overrides: Vec<String>,
-    /// Output folder (overrides output.folder).
+    /// Output folder (default: the scenario's output.folder, itself `results` by default).
     #[arg(long)]
     output: Option<PathBuf>,
 }

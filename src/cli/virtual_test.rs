@@ -19,11 +19,14 @@ use std::path::{Path, PathBuf};
 
 #[derive(clap::Subcommand, Debug)]
 pub enum TestCommand {
-    /// Bias-extension test: ±45° specimen clamped at both ends and pulled (MODEL.md §5).
+    /// Bias-extension test: ±45° specimen clamped at both ends and pulled (docs/model.md §5).
+    #[command(after_help = process_defaults(&BiasExtension::benchmark(DRY_TEMPERATURE).process))]
     BiasExtension(BiasArgs),
     /// Uniaxial (strip) tension test: bottom edge clamped, top edge pulled, yarns at any angle.
+    #[command(after_help = process_defaults(&UniaxialTension::standard(DRY_TEMPERATURE).process))]
     Uniaxial(UniaxialArgs),
     /// Picture-frame test: square specimen in a pin-jointed frame pulled along its diagonal.
+    #[command(after_help = process_defaults(&PictureFrame::standard(DRY_TEMPERATURE).process))]
     PictureFrame(PictureFrameArgs),
 }
 
@@ -33,28 +36,30 @@ pub struct CommonArgs {
     /// Material card (TOML).
     #[arg(long)]
     card: PathBuf,
-    /// Test temperature (°C); required when the card has a matrix.
+    /// Test temperature (°C); required when the card has a matrix, default 20 °C for a dry
+    /// fabric.
     #[arg(long, allow_negative_numbers = true)]
     temperature: Option<f64>,
-    /// Physical crosshead speed (mm/s); 0.333 mm/s is 20 mm/min.
+    /// Physical crosshead speed (mm/s); 0.333 mm/s is 20 mm/min. Default: the test's, below.
     #[arg(long, allow_negative_numbers = true)]
     speed: Option<f64>,
-    /// Run the process this many times faster, with eta1 divided by it (MODEL.md §6).
+    /// Run the process this many times faster, with eta1 divided by it (docs/model.md §6).
+    /// Default: the test's, below.
     #[arg(long, allow_negative_numbers = true)]
     time_scaling: Option<f64>,
-    /// Mass scaling to this time step (s); 0 for none.
+    /// Mass scaling to this time step (s); 0 for none. Default: the test's, below.
     #[arg(long, allow_negative_numbers = true)]
     target_step: Option<f64>,
     /// Global mass-proportional damping (1/s).
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     damping: f64,
-    /// Target element size (mm).
+    /// Target element size (mm). Default: the test's, below.
     #[arg(long, allow_negative_numbers = true)]
     element_size: Option<f64>,
     /// How rectangular cells are cut into triangles.
     #[arg(long, value_enum, default_value_t = DiagonalPattern::Crossed)]
     pattern: DiagonalPattern,
-    /// Crosshead travel at the end (mm).
+    /// Crosshead travel at the end (mm). Default: the test's, below.
     #[arg(long, allow_negative_numbers = true)]
     end_displacement: Option<f64>,
     /// Number of ParaView frames (0 for none).
@@ -175,13 +180,38 @@ pub fn run(command: &TestCommand) -> anyhow::Result<()> {
     }
 }
 
-/// The card, and the test temperature: given, or for a dry fabric room temperature.
+/// The test temperature of a dry fabric when none is given (°C): room temperature.
+const DRY_TEMPERATURE: f64 = 20.0;
+
+/// The defaults of a test's process for its `--help`, read from the test itself so that the
+/// help says what the test does.
+fn process_defaults(p: &TestProcess) -> String {
+    let mass_scaling = match p.target_time_step {
+        Some(dt) => format!("{dt:e} s"),
+        None => "none (physical mass)".into(),
+    };
+    format!(
+        "Defaults of this test:\n  \
+         --speed {:.3} mm/s ({:.0} mm/min)\n  \
+         --time-scaling {}\n  \
+         --target-step {mass_scaling}\n  \
+         --element-size {} mm\n  \
+         --end-displacement {} mm",
+        p.speed,
+        p.speed * 60.0,
+        p.time_scaling,
+        p.element_size,
+        p.end_displacement,
+    )
+}
+
+/// The card, and the test temperature: given, or for a dry fabric [`DRY_TEMPERATURE`].
 fn card_and_temperature(common: &CommonArgs) -> anyhow::Result<(MaterialCard, f64)> {
     common.check_numbers()?;
     let card = MaterialCard::load(&common.card)?;
     let temperature = match (common.temperature, card.temperature_range()) {
         (Some(t), _) => t,
-        (None, None) => 20.0,
+        (None, None) => DRY_TEMPERATURE,
         (None, Some((lo, hi))) => anyhow::bail!(
             "--temperature is required: the card's matrix is tabulated from {lo} to {hi} °C"
         ),

@@ -1,4 +1,4 @@
-//! Rigid tools and their contact with the blank (MODEL.md §6): triangulated surfaces, the
+//! Rigid tools and their contact with the blank (docs/model.md §6): triangulated surfaces, the
 //! standard tool shapes, and penalty contact with Coulomb friction.
 
 pub mod penalty;

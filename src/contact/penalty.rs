@@ -1,4 +1,4 @@
-//! Penalty node-to-surface contact with regularised Coulomb friction (MODEL.md §6).
+//! Penalty node-to-surface contact with regularised Coulomb friction (docs/model.md §6).
 //!
 //! A blank node at `x` meets a tool when its gap to the tool's surface, offset by half the
 //! blank's thickness, is negative: `g = (x - p) . n - t/2 < 0` with `p` the nearest point of the

@@ -1,4 +1,4 @@
-//! Rotation-free bending of the sheet (MODEL.md §4, bending), in the family of the
+//! Rotation-free bending of the sheet (docs/model.md §4, bending), in the family of the
 //! rotation-free shell triangles of Phaal & Calladine 1992 and Oñate & Zárate 2000: the
 //! curvature of each triangle is read off the positions of the nodes around it.
 //!

@@ -1,4 +1,4 @@
-//! Total-Lagrangian 3-node membrane triangle carrying the laminate (MODEL.md §1, §4).
+//! Total-Lagrangian 3-node membrane triangle carrying the laminate (docs/model.md §1, §4).
 //!
 //! Constant strain: `F = sum_a x_a (x) grad0 N_a` (3x2, from local reference coordinates of the
 //! element's tangent plane to current 3D positions), and the internal nodal forces are
@@ -86,7 +86,7 @@ impl MembraneTriangle {
             })
     }
 
-    /// Internal nodal forces `f_a = A0 F N grad0 N_a` (MODEL.md §4).
+    /// Internal nodal forces `f_a = A0 F N grad0 N_a` (docs/model.md §4).
     pub fn internal_forces(&self, f: &Matrix3x2<f64>, n: &Matrix2<f64>) -> [Vector3<f64>; 3] {
         let fn_area = f * n * self.area;
         self.shape_gradients.map(|g| fn_area * g)
@@ -100,7 +100,7 @@ impl MembraneTriangle {
 
     /// Centroid of the current positions.
     /// Shear angle of the fabric (radians, signed) at the current positions `x`: the change of
-    /// the angle between warp and weft (MODEL.md §3, `I10 = sin^2 gamma`).
+    /// the angle between warp and weft (docs/model.md §3, `I10 = sin^2 gamma`).
     pub fn shear_angle(&self, x: &[Vector3<f64>]) -> f64 {
         let f = self.gradient(x);
         let mut c = Matrix3::identity();

@@ -1,4 +1,4 @@
-//! Virtual bias-extension test (MODEL.md §5): a rectangular specimen with the yarns at ±45° to
+//! Virtual bias-extension test (docs/model.md §5): a rectangular specimen with the yarns at ±45° to
 //! its length, clamped at both ends, pulled at constant crosshead speed. The central zone
 //! shears like a pin-jointed net, `gamma = 90° - 2 arccos((D + d)/(sqrt(2) D))`.
 
@@ -42,7 +42,7 @@ pub type BiasExtensionRun = SheetTestRun<BiasRow>;
 
 impl BiasExtension {
     /// The benchmark specimen of Cao et al. 2008: 150 x 450 mm, ±45°, pulled 60 mm at
-    /// 20 mm/min. Run 300 times faster (eta1 divided by 300, MODEL.md §6) on 15 mm cells with
+    /// 20 mm/min. Run 300 times faster (eta1 divided by 300, docs/model.md §6) on 15 mm cells with
     /// physical mass: for the shipped T300/PPS card the crosshead then moves at under 1 % of
     /// the laminate's shear wave speed, the run is quasi-static (kinetic energy below 3 % of
     /// internal energy) and takes a few minutes on 2 cores. Mass scaling would not make it

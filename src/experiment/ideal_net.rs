@@ -1,7 +1,7 @@
 //! Equilibrium of the bias-extension specimen as an ideal (inextensible) net with a shear
 //! energy: the reference solution the finite-element bias test is checked against.
 //!
-//! The pin-jointed prediction of MODEL.md §5 assumes three zones of uniform shear. With
+//! The pin-jointed prediction of docs/model.md §5 assumes three zones of uniform shear. With
 //! inextensible yarns, the deformed net is a Tchebychev net: the warp direction `alpha` can
 //! only depend on the position `m = x + y` along the warp, the weft direction `beta` only on
 //! the position `k = y - x` along the weft (compatibility of `r_m` and `r_k`). Yarn positions
@@ -35,7 +35,7 @@ impl<F: Fn(f64) -> [f64; 3]> TrellisEnergy for F {
     }
 }
 
-/// The fabric's in-plane shear energy in trellis shear, `t W_s(sin^2 gamma)` (MODEL.md §3:
+/// The fabric's in-plane shear energy in trellis shear, `t W_s(sin^2 gamma)` (docs/model.md §3:
 /// `I10 = sin^2 gamma`, yarns unstretched), with its derivatives in `gamma`.
 pub fn fabric_trellis_energy(
     shear: &crate::material::fabric::ShearInteraction,

@@ -1,4 +1,4 @@
-//! Closed-form kinematics and force normalisation of the standard shear tests (MODEL.md §5).
+//! Closed-form kinematics and force normalisation of the standard shear tests (docs/model.md §5).
 
 use std::f64::consts::FRAC_PI_2;
 
@@ -28,7 +28,7 @@ pub fn bias_extension_force(width: f64, length: f64, gamma: f64, f_sh: impl Fn(f
         / ((h / w - 1.0) * (half.cos() - half.sin()))
 }
 
-/// Normalised shear force from a measured bias-extension curve (MODEL.md §5, Cao et al. 2008):
+/// Normalised shear force from a measured bias-extension curve (docs/model.md §5, Cao et al. 2008):
 /// `F_sh(g) = [(H/W - 1) F (cos(g/2) - sin(g/2)) - W F_sh(g/2) cos(g/2)] / [(2H - 3W) cos g]`,
 /// solved from small angles up. `F_sh(g/2)` is interpolated in the values already found;
 /// below the first of them `F_sh` is taken proportional to `g`, so `F_sh(g/2) = F_sh(g)/2`.

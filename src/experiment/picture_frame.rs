@@ -1,4 +1,4 @@
-//! Virtual picture-frame test (MODEL.md §5): a square specimen of side L, yarns along the four
+//! Virtual picture-frame test (docs/model.md §5): a square specimen of side L, yarns along the four
 //! arms of a pin-jointed frame, the bottom corner hinge fixed and the top corner pulled along
 //! the diagonal y. The arms stay straight and of length L, so the frame is a rhombus; with
 //! `theta` half the angle between two arms at the bottom hinge,
@@ -54,7 +54,7 @@ pub struct PictureFrameRow {
     pub shear_angle: f64,
     /// Shear angle of the frame, `90° - 2 theta` (degrees).
     pub shear_angle_frame: f64,
-    /// Normalised shear force `F / (2 cos theta) L / L^2` (N/mm), MODEL.md §5.
+    /// Normalised shear force `F / (2 cos theta) L / L^2` (N/mm), docs/model.md §5.
     pub normalised_shear_force: f64,
 }
 
@@ -90,7 +90,7 @@ impl FrameKinematics {
         (d_right * xi + d_left * eta) * (-1.0 / (2.0 * self.side * sin))
     }
 
-    /// Half the angle between the arms at the bottom hinge (radians), MODEL.md §5.
+    /// Half the angle between the arms at the bottom hinge (radians), docs/model.md §5.
     pub fn half_angle(&self, d: f64) -> f64 {
         picture_frame_angles(self.side, d).0
     }
@@ -111,7 +111,7 @@ impl PictureFrame {
     /// A 150 mm frame **(choice)**: the order of size of the frames used for woven-fabric
     /// shear characterisation (not a value from a standard or from the paper), pulled 60 mm
     /// (40° of shear) at 20 mm/min, the crosshead speed of the bias-extension benchmark. Run
-    /// 300 times faster with eta1 divided by 300 (MODEL.md §6), on 37.5 mm crossed cells (the
+    /// 300 times faster with eta1 divided by 300 (docs/model.md §6), on 37.5 mm crossed cells (the
     /// field is homogeneous, so a coarse mesh loses nothing), mass-scaled to a 4e-6 s step:
     /// every boundary node is prescribed, so the added inertia only has to stay small against
     /// the shear work, and at this step the crosshead moves at 0.8 % of the shear wave speed

@@ -55,7 +55,7 @@ pub struct TestProcess {
     pub temperature: f64,
     /// Crosshead speed of the physical test (mm/s).
     pub speed: f64,
-    /// Time scaling `s` (MODEL.md §6): the crosshead runs `s` times faster in the simulation
+    /// Time scaling `s` (docs/model.md §6): the crosshead runs `s` times faster in the simulation
     /// and eta1 is divided by `s`, so the matrix sees the physical strain rates.
     pub time_scaling: f64,
     /// Crosshead travel when the test stops (mm).
@@ -420,7 +420,7 @@ pub fn validate_strip(width: f64, length: f64, ply_angle: f64) -> Result<(), Str
 
 /// A `width x length` strip meshed by `process`, its bottom edge clamped and its top edge
 /// moved along +y with the process's crosshead, warp along `warp`; the laminate is
-/// time-scaled (MODEL.md §6). The uniaxial and bias-extension specimens.
+/// time-scaled (docs/model.md §6). The uniaxial and bias-extension specimens.
 pub fn clamped_strip(
     (width, length): (f64, f64),
     warp: Vector3<f64>,

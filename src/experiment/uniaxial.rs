@@ -1,10 +1,10 @@
-//! Virtual uniaxial (strip) tension test (MODEL.md §5, "fabric tension coefficients A_k from
+//! Virtual uniaxial (strip) tension test (docs/model.md §5, "fabric tension coefficients A_k from
 //! uniaxial tension along warp and weft"): a strip clamped at its bottom edge and pulled at its
 //! top edge with the crosshead, the yarns at any angle to the pull.
 //!
 //! Along a yarn family (0° or 90°) the strip stretches homogeneously with no lateral strain: the
 //! clamps allow exactly that and the fabric has no Poisson coupling between warp and weft. The
-//! force per unit width is then the yarn tension law of MODEL.md §3 times the layer thickness,
+//! force per unit width is then the yarn tension law of docs/model.md §3 times the layer thickness,
 //! `F / W = t_B dW_t/dlambda` at `lambda = 1 + d / L` (the first Piola–Kirchhoff resultant
 //! `lambda N_yy` with `N_yy = t_B 2 W_4 = t_B W_t'(lambda) / lambda`). Off-axis strips shear
 //! between the clamps like a bias-extension specimen and are far softer.
@@ -53,7 +53,7 @@ impl UniaxialTension {
     /// proportions of tensile strips of woven composites), warp along the pull, pulled 3 mm
     /// (2 % strain: the crimp is out of a carbon weave and its yarns are near their failure
     /// strain) at 20 mm/min, the crosshead speed of the bias-extension benchmark. Run 300 times
-    /// faster with eta1 divided by 300 (MODEL.md §6) on 12.5 mm crossed cells (two across the
+    /// faster with eta1 divided by 300 (docs/model.md §6) on 12.5 mm crossed cells (two across the
     /// width) with physical mass. Along a yarn the strip stretches homogeneously, so the coarse mesh is exact there;
     /// the crosshead moves at below 2e-5 of the yarn wave speed of the shipped T300/PPS card
     /// and the run takes a few seconds. Refine the mesh for off-axis strips.

@@ -1,9 +1,9 @@
-//! Identification of the yarn tension law (MODEL.md §3, §5): `A_2..A_n` of
+//! Identification of the yarn tension law (docs/model.md §3, §5): `A_2..A_n` of
 //! `W_t(I) = sum_{k=2..n} (A_k / k) (sqrt(I) - 1)^k` from a strip tension test along the warp
 //! or the weft.
 //!
 //! Model: along a yarn family the strip stretches homogeneously and its force per unit
-//! reference width is the fabric layer's yarn tension times its thickness (MODEL.md §5; the
+//! reference width is the fabric layer's yarn tension times its thickness (docs/model.md §5; the
 //! virtual test `experiment::uniaxial` checks this against the finite elements),
 //! `N(lambda) = t_B dW_t/dlambda = t_B sum_{k=2..n} A_k (lambda - 1)^(k-1)`.
 //!
@@ -25,7 +25,7 @@ use super::strip_data::StripCurve;
 use crate::io::InputError;
 use nalgebra::{DMatrix, DVector};
 
-/// `N(lambda) = t_B sum_k A_k (lambda - 1)^(k-1)` (N/mm) for `lambda > 1`, MODEL.md §3/§5;
+/// `N(lambda) = t_B sum_k A_k (lambda - 1)^(k-1)` (N/mm) for `lambda > 1`, docs/model.md §3/§5;
 /// `coefficients` are `A_2, A_3, ...` (MPa), `thickness` is `t_B` (mm).
 pub fn strip_force_per_width(thickness: f64, coefficients: &[f64], stretch: f64) -> f64 {
     let e = stretch - 1.0;
@@ -74,7 +74,7 @@ pub fn fit_yarn_tension(
     if a2 <= 0.0 {
         return Err(error(format!(
             "fitted A2 = {a2:.4e} ± {:.1e} MPa is not positive: the curve does not start \
-             stiffening from zero strain as MODEL.md §3 assumes (fewer --terms?)",
+             stiffening from zero strain as docs/model.md §3 assumes (fewer --terms?)",
             result.standard_errors[0]
         )));
     }

@@ -1,16 +1,16 @@
-//! Identification of the matrix law (MODEL.md §5): `C10(T)` and `eta1(T)` from neat-resin
+//! Identification of the matrix law (docs/model.md §5): `C10(T)` and `eta1(T)` from neat-resin
 //! uniaxial tension curves at several temperatures and strain rates, `D1(T)` from a bulk
 //! modulus or a Poisson ratio.
 //!
-//! Model, MODEL.md §5, incompressible uniaxial tension at stretch `l` and constant rate `ldot`:
-//! `sigma11 = 2 C10 (l^2 - 1/l) + 2 eta1 (l^2 + 2/l - 3) (2 l^3 + l^-3) ldot`.
-//! It is what the law of `src/material/matrix.rs` (seed Eqs. 8–9) gives for `F = diag(l,
-//! l^-1/2, l^-1/2)` once the lateral stresses are removed (tested below against the law itself,
-//! with the card's finite `D1` and the lateral stretch solved for zero lateral stress).
+//! Model, docs/model.md §5, incompressible uniaxial tension at stretch `l` and constant rate
+//! `ldot`: `sigma11 = 2 C10 (l^2 - 1/l) + 2 eta1 (l^2 + 2/l - 3) (2 l^3 + l^-3) ldot`.
+//! It is what the law of `src/material/matrix.rs` (Eqs. 8–9 of Gong et al. 2018) gives for `F =
+//! diag(l, l^-1/2, l^-1/2)` once the lateral stresses are removed (tested below against the law
+//! itself, with the card's finite `D1` and the lateral stretch solved for zero lateral stress).
 //!
 //! Choices:
 //! - Per temperature, `C10` and `eta1` are fitted jointly to every curve at that temperature
-//!   (residuals: model minus measured true stress, MPa, unweighted). MODEL.md §5 identifies
+//!   (residuals: model minus measured true stress, MPa, unweighted). docs/model.md §5 identifies
 //!   `eta1` from the difference between rates, so a temperature whose curves all share one
 //!   rate fits `C10` alone, with `eta1` taken from a given card (`--card`) at that temperature;
 //!   without one it is an error. The curve shape at one rate does separate the two terms in
@@ -24,18 +24,18 @@ use super::tension_data::TensionCurve;
 use crate::material::TemperatureTable;
 use nalgebra::{DMatrix, DVector};
 
-/// `d sigma11 / d C10`: `2 (l^2 - 1/l)`. MODEL.md §5.
+/// `d sigma11 / d C10`: `2 (l^2 - 1/l)`. docs/model.md §5.
 pub fn elastic_shape(stretch: f64) -> f64 {
     2.0 * (stretch * stretch - 1.0 / stretch)
 }
 
-/// `d sigma11 / d eta1`: `2 (l^2 + 2/l - 3) (2 l^3 + l^-3) ldot`. MODEL.md §5.
+/// `d sigma11 / d eta1`: `2 (l^2 + 2/l - 3) (2 l^3 + l^-3) ldot`. docs/model.md §5.
 pub fn viscous_shape(stretch: f64, strain_rate: f64) -> f64 {
     let l = stretch;
     2.0 * (l * l + 2.0 / l - 3.0) * (2.0 * l.powi(3) + l.powi(-3)) * strain_rate
 }
 
-/// True uniaxial stress of the incompressible resin, MODEL.md §5.
+/// True uniaxial stress of the incompressible resin, docs/model.md §5.
 pub fn uniaxial_stress(c10: f64, eta1: f64, stretch: f64, strain_rate: f64) -> f64 {
     c10 * elastic_shape(stretch) + eta1 * viscous_shape(stretch, strain_rate)
 }
@@ -206,7 +206,7 @@ fn fit_one_temperature(
             .ok_or_else(|| {
                 format!(
                     "all curves share the strain rate {} 1/s, so eta1 cannot be identified \
-                     (MODEL.md §5 takes it from the rate difference): add a curve at another \
+                     (docs/model.md §5 takes it from the rate difference): add a curve at another \
                      rate, or give --card with an eta1 table covering {temperature} °C",
                     group[0].strain_rate
                 )
@@ -248,7 +248,7 @@ fn check_physical(c10: f64, c10_se: f64, eta1: &Eta1) -> Result<(), String> {
     if c10 <= 0.0 {
         return Err(format!(
             "fitted C10 = {c10:.4e} ± {c10_se:.1e} MPa is not positive: the curves do not \
-             show the elastic stiffening of MODEL.md §5"
+             show the elastic stiffening of docs/model.md §5"
         ));
     }
     if let Eta1::Fitted {
@@ -574,7 +574,8 @@ mod tests {
 
     #[test]
     fn closed_form_is_what_the_implemented_law_gives() {
-        // MODEL.md §5 against seed Eqs. (8)–(9) as implemented, at 300 °C of the shipped card.
+        // docs/model.md §5 against Eqs. (8)–(9) of Gong et al. 2018 as implemented, at 300 °C of
+        // the shipped card.
         let (c10, eta1, d1) = (0.10, 1.86e-4, 1.3333e-3);
         let table = |v: f64| TemperatureTable::new("p", vec![300.0], vec![v]).unwrap();
         let law = ViscoHyperelasticMatrix::new(table(c10), table(d1), table(eta1));

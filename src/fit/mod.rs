@@ -1,4 +1,4 @@
-//! Identification of material parameters from test curves (MODEL.md §5).
+//! Identification of material parameters from test curves (docs/model.md §5).
 //!
 //! - [`least_squares`]: Levenberg–Marquardt with standard errors and the RMS residual;
 //! - [`tension_data`]: the manifest and CSV curves of neat-resin tension tests;

@@ -1,12 +1,13 @@
 //! Shear coefficients `c_k` of the fabric's interaction energy `W_s(I10) = sum c_k I10^k`
-//! (MODEL.md §3) from a bias-extension or picture-frame force–displacement curve (MODEL.md §5).
+//! (docs/model.md §3) from a bias-extension or picture-frame force–displacement curve
+//! (docs/model.md §5).
 //!
 //! 1. The curve is read and checked point by point (every error names the file and line).
 //! 2. Each point becomes `(gamma, F_sh)`: for a bias-extension test the pin-jointed angle of
 //!    the central zone and the normalised shear force of Cao et al. 2008, solved recursively
-//!    from small angles (MODEL.md §5, `experiment::kinematics`); for a picture frame the
-//!    frame's angle and `F_norm = F L_frame / (2 cos(theta) L_fabric^2)` (MODEL.md §5).
-//! 3. `c_1..c_m` are fitted to `F_sh(gamma) = 2 t_B sin(gamma) W_s'(sin^2 gamma)` (MODEL.md
+//!    from small angles (docs/model.md §5, `experiment::kinematics`); for a picture frame the
+//!    frame's angle and `F_norm = F L_frame / (2 cos(theta) L_fabric^2)` (docs/model.md §5).
+//! 3. `c_1..c_m` are fitted to `F_sh(gamma) = 2 t_B sin(gamma) W_s'(sin^2 gamma)` (docs/model.md
 //!    §5, last bullet) up to a largest angle, by Levenberg–Marquardt (`least_squares`).
 //!
 //! The model is linear in `c_k`; LM is used anyway for its standard errors and checks, started
@@ -112,7 +113,7 @@ pub fn parse_force_curve(text: &str, origin: &str) -> Result<ForceCurve, InputEr
 }
 
 impl ShearTest {
-    /// Checks the geometry: positive lengths; bias extension with H/W >= 2 (MODEL.md §5).
+    /// Checks the geometry: positive lengths; bias extension with H/W >= 2 (docs/model.md §5).
     pub fn validate(&self) -> Result<(), String> {
         let positive = |name: &str, v: f64| {
             if v.is_finite() && v > 0.0 {
@@ -127,8 +128,8 @@ impl ShearTest {
                 positive("length", length)?;
                 if length < 2.0 * width {
                     return Err(format!(
-                        "length/width = {:.3}: the bias-extension kinematics (MODEL.md §5) needs \
-                         a free length of at least twice the width",
+                        "length/width = {:.3}: the bias-extension kinematics (docs/model.md §5) \
+                         needs a free length of at least twice the width",
                         length / width
                     ));
                 }
@@ -145,7 +146,7 @@ impl ShearTest {
     }
 }
 
-/// The normalised shear curve of `curve` (points with positive displacement), MODEL.md §5.
+/// The normalised shear curve of `curve` (points with positive displacement), docs/model.md §5.
 /// Errors name the first point past the test's kinematic limit (90° of shear).
 pub fn shear_points(curve: &ForceCurve, test: &ShearTest) -> Result<Vec<ShearPoint>, InputError> {
     test.validate()
@@ -199,7 +200,7 @@ pub fn shear_points(curve: &ForceCurve, test: &ShearTest) -> Result<Vec<ShearPoi
         .collect())
 }
 
-/// Shear angle of the test at crosshead displacement `d` (radians), MODEL.md §5.
+/// Shear angle of the test at crosshead displacement `d` (radians), docs/model.md §5.
 pub fn shear_angle(test: &ShearTest, d: f64) -> f64 {
     match *test {
         ShearTest::BiasExtension { width, length } => bias_extension_shear_angle(width, length, d),
@@ -209,7 +210,7 @@ pub fn shear_angle(test: &ShearTest, d: f64) -> f64 {
 
 /// `d F_sh / d c_k = 2 t sin(g) k sin^(2(k-1))(g)` at shear angle `g` (radians) for fabric
 /// layers of total thickness `t` (mm), `k` from 1: the model `F_sh = 2 t sin(g) W_s'(sin^2 g)`
-/// of MODEL.md §5 is linear in the coefficients, so `F_sh = sum_k c_k basis(t, g, k)`. The
+/// of docs/model.md §5 is linear in the coefficients, so `F_sh = sum_k c_k basis(t, g, k)`. The
 /// analytic fit's Jacobian here, and through Cao's forward model the surrogate Jacobian of the
 /// FE refinement (`shear_fe`).
 pub(crate) fn basis(thickness: f64, gamma: f64, k: usize) -> f64 {

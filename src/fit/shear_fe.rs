@@ -1,9 +1,9 @@
-//! Refinement of the shear coefficients `c_k` of `W_s(I10) = sum c_k I10^k` (MODEL.md §3) by
+//! Refinement of the shear coefficients `c_k` of `W_s(I10) = sum c_k I10^k` (docs/model.md §3) by
 //! the FE bias-extension test itself (issue 5, "refine by running the FE simulation inside the
 //! fit loop").
 //!
 //! Why: [`super::shear::fit_shear`] fits `c_k` through Cao's normalisation, which assumes the
-//! pin-jointed kinematics of MODEL.md §5. The FE specimen departs from them (with a stiffening
+//! pin-jointed kinematics of docs/model.md §5. The FE specimen departs from them (with a stiffening
 //! law the central zone lags the pin-jointed angle; the yarns stretch a little), so the FE test
 //! run with the analytically fitted card does not reproduce the curve it was fitted to. Here
 //! the measured force curve is matched by the FE force itself.
@@ -14,7 +14,7 @@
 //!    `0 < d_i` and pin-jointed angle `gamma(d_i) <= max_shear`, `F_FE` interpolated in the
 //!    FE history; `scale_i = max(F_data(d_i), RELATIVE_FLOOR x largest F_data)` as in `fit shear`;
 //! 2. the Jacobian is the analytic forward model's, `dF_an(d; c)/dc_k`, with
-//!    `F_an(d; c) = bias_extension_force(W, H, gamma(d), F_sh)` (Cao et al. 2008, MODEL.md §5)
+//!    `F_an(d; c) = bias_extension_force(W, H, gamma(d), F_sh)` (Cao et al. 2008, docs/model.md §5)
 //!    and `F_sh(g) = 2 t_B sin g W_s'(sin^2 g)`: linear in `c`, so it is computed once;
 //! 3. step `dc = -(J^T J)^-1 J^T r` by SVD; a step that raises the FE misfit is halved;
 //! 4. stop when the step changes the forces by less than the tolerance, or the misfit changes
@@ -55,7 +55,7 @@ pub const DEFAULT_CELLS_ACROSS_WIDTH: f64 = 6.0;
 /// so that a softer trial law of the line search does not end the refinement.
 pub const DEFAULT_MAX_KINETIC_RATIO: f64 = 0.1;
 
-/// How the FE bias-extension test inside the loop is run (MODEL.md §5, §6).
+/// How the FE bias-extension test inside the loop is run (docs/model.md §5, §6).
 #[derive(Clone, Debug, PartialEq)]
 pub struct FeBiasSettings {
     /// Edge length of the crossed mesh cells (mm); default `W / 6`.
@@ -64,7 +64,7 @@ pub struct FeBiasSettings {
     pub simulated_speed: f64,
     /// Crosshead speed of the physical test (mm/s). Needed for a card with matrix layers: the
     /// FE test then runs `simulated_speed / test_speed` times faster with the viscosity
-    /// divided by that factor (time scaling, MODEL.md §6), so the matrix sees the test's rate.
+    /// divided by that factor (time scaling, docs/model.md §6), so the matrix sees the test's rate.
     /// A dry fabric is rate-independent and may leave it out.
     pub test_speed: Option<f64>,
     /// Test temperature (°C); it must lie in the matrix tables of a card that has them.
@@ -142,8 +142,8 @@ impl RefineSettings {
         }
         if self.length < 2.0 * self.width {
             return Err(format!(
-                "length/width = {:.3}: the bias-extension kinematics (MODEL.md §5) needs a free \
-                 length of at least twice the width",
+                "length/width = {:.3}: the bias-extension kinematics (docs/model.md §5) needs \
+                 a free length of at least twice the width",
                 self.length / self.width
             ));
         }
@@ -179,7 +179,7 @@ impl RefineSettings {
     }
 
     /// The FE bias-extension test for `card`, pulled to `end_displacement` (mm): time-scaled for
-    /// a card with matrix layers (MODEL.md §6), at the simulated speed for a dry fabric.
+    /// a card with matrix layers (docs/model.md §6), at the simulated speed for a dry fabric.
     pub fn bias_extension(
         &self,
         card: &MaterialCard,
@@ -193,7 +193,7 @@ impl RefineSettings {
                 (None, false) => (fe.simulated_speed, 1.0),
                 (None, true) => return Err(ShearFeError::Settings(
                     "the card has matrix layers: the physical test speed is needed to time-scale \
-                     their viscosity (MODEL.md §6)"
+                     their viscosity (docs/model.md §6)"
                         .into(),
                 )),
             };
@@ -354,7 +354,7 @@ pub enum ShearFeError {
 
 /// The analytic forward model: the bias-extension force (N) at crosshead displacement `d` of a
 /// pin-jointed specimen whose fabric layers (total thickness `thickness`) follow `c`, by the
-/// energy balance of Cao et al. 2008 (MODEL.md §5).
+/// energy balance of Cao et al. 2008 (docs/model.md §5).
 pub fn analytic_force(width: f64, length: f64, thickness: f64, c: &[f64], d: f64) -> f64 {
     let law = ShearInteraction::new(c.to_vec());
     let gamma = bias_extension_shear_angle(width, length, d);

@@ -1,19 +1,19 @@
 //! The matrix layers' share of a shear test's crosshead force, to be subtracted before the
-//! fabric's shear law is fitted (MODEL.md §5: "after subtracting the matrix layers'
+//! fabric's shear law is fitted (docs/model.md §5: "after subtracting the matrix layers'
 //! contribution").
 //!
 //! The matrix layers are driven through the test's pin-jointed kinematics at the test's
-//! temperature and crosshead speed, in plane stress like in the sheet (MODEL.md §2, §4). In the
-//! pin-jointed shear of angle `gamma` with the pull along `y`, the yarns stay at
+//! temperature and crosshead speed, in plane stress like in the sheet (docs/model.md §2, §4). In
+//! the pin-jointed shear of angle `gamma` with the pull along `y`, the yarns stay at
 //! `±theta = ±(45° - gamma/2)` to `y` and keep their length, so
 //! `F = diag(sqrt(2) sin(theta), sqrt(2) cos(theta))` and
 //! `C2 = diag(2 sin^2(theta), 2 cos^2(theta))`, `C2dot = diag(-cos(gamma), cos(gamma)) gammadot`.
-//! The stress power per unit reference area is `P = N : C2dot / 2` (MODEL.md §4), and the
+//! The stress power per unit reference area is `P = N : C2dot / 2` (docs/model.md §4), and the
 //! crosshead force is the power of every zone over the crosshead speed:
 //! - picture frame: the whole fabric square `L_fabric^2` at the frame's angle;
 //! - bias extension (Cao et al. 2008): zone C of area `W (H - 3W/2)` at `gamma`, zone B of area
 //!   `W^2` at `gamma/2` (and half its rate), zone A undeformed; the areas are the ones behind
-//!   the normalisation of MODEL.md §5 (`experiment::kinematics::bias_extension_force`).
+//!   the normalisation of docs/model.md §5 (`experiment::kinematics::bias_extension_force`).
 //!
 //! The viscous matrix remembers its thickness rate, so each zone is followed from `d = 0` in
 //! small steps of shear angle, not only at the data points.

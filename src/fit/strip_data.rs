@@ -1,6 +1,6 @@
 //! Strip (uniaxial) tension curves of the prepreg along warp or weft for
-//! `thermostamp fit fabric-tension` (MODEL.md §5). Every error names the file, and the line where
-//! there is one.
+//! `thermostamp fit fabric-tension` (docs/model.md §5). Every error names the file, and the line
+//! where there is one.
 //!
 //! CSV: a header naming one of `strain` (engineering, `d / L0`) or `stretch` (`1 + strain`),
 //! and one of `force_per_width` (N/mm, the force over the reference width) or `force` (N, then

@@ -1,6 +1,6 @@
 //! Synthetic tension and bias-extension curves for round-trip checks and examples of the fits: the closed form of
-//! MODEL.md §5 with optional multiplicative Gaussian noise from a seeded generator, so that the
-//! same seed gives the same data on every machine (no RNG dependency).
+//! docs/model.md §5 with optional multiplicative Gaussian noise from a seeded generator, so that
+//! the same seed gives the same data on every machine (no RNG dependency).
 
 use super::fabric_tension::strip_force_per_width;
 use super::matrix::uniaxial_stress;
@@ -81,7 +81,7 @@ pub fn tension_curve(
 }
 
 /// A strip tension curve along one yarn family from the law `A_2, A_3, ...` of a fabric layer
-/// of thickness `thickness` (MODEL.md §5, `N = t_B sum_k A_k (lambda - 1)^(k-1)`): `points`
+/// of thickness `thickness` (docs/model.md §5, `N = t_B sum_k A_k (lambda - 1)^(k-1)`): `points`
 /// stretches evenly from 1 to `1 + max_strain`, each force per width multiplied by
 /// `1 + noise * N(0, 1)` (clamped at zero).
 pub fn strip_curve(
@@ -105,7 +105,7 @@ pub fn strip_curve(
 /// A bias-extension curve (CSV text, `displacement_mm,force_N`) of a `width` x `length`
 /// specimen of a fabric layer `thickness` thick with shear law `law`: `points` displacements
 /// evenly up to the pin-jointed angle `max_gamma` (radians), forces from the forward form of
-/// Cao's normalisation (MODEL.md §5, `bias_extension_force`), each multiplied by
+/// Cao's normalisation (docs/model.md §5, `bias_extension_force`), each multiplied by
 /// `1 + noise * N(0, 1)` and clamped at zero. The first row is `0,0`.
 pub fn bias_extension_curve(
     law: &ShearInteraction,

@@ -15,7 +15,7 @@
 //! gauge_length = 20.0        # mm      with the gauge length)
 //! ```
 //! CSV: a header naming one of `strain` (engineering, `d / L0`) or `stretch` (`1 + strain`),
-//! and one of `stress` (true, Cauchy stress, MPa, the sigma11 of MODEL.md §5) or
+//! and one of `stress` (true, Cauchy stress, MPa, the sigma11 of docs/model.md §5) or
 //! `nominal_stress` (force over the initial section, MPa; converted with incompressibility,
 //! `sigma = lambda * P`).
 

@@ -1,4 +1,4 @@
-//! Thermo-stamping runs (MODEL.md §6): a scenario file, the model it describes (blank, card,
+//! Thermo-stamping runs (docs/model.md §6): a scenario file, the model it describes (blank, card,
 //! tools), the run with its histories, and the formed blank written for the next analysis.
 
 pub mod drape_preview;

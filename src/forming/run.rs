@@ -129,8 +129,8 @@ pub fn run(
 }
 
 /// Wrinkling of the flange, the part of the blank that the die's flat face and the blank
-/// holder should keep flat (MODEL.md §6, "wrinkling: out-of-plane waviness where the sheet does
-/// not follow the tool"), from each flange node's gap to the die:
+/// holder should keep flat (docs/model.md §6, "wrinkling: out-of-plane waviness where the sheet
+/// does not follow the tool"), from each flange node's gap to the die:
 ///
 /// - **lift-off**: the largest gap, and the area lifted by more than half the ply. A flange
 ///   that leaves the die as a smooth cone counts here as much as a wavy one.

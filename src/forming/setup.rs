@@ -21,7 +21,7 @@ use std::collections::BTreeMap;
 use std::path::Path;
 use std::sync::Arc;
 
-/// Contact penalty `s` of `k = s m / dt^2` (MODEL.md §6).
+/// Contact penalty `s` of `k = s m / dt^2` (docs/model.md §6).
 const PENALTY_SCALE: f64 = 0.1;
 
 /// The holder's inertia in blank masses: heavy enough to stay stable on the contact springs of

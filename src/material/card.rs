@@ -20,7 +20,7 @@ pub struct MaterialCard {
     pub matrix: Option<Arc<ViscoHyperelasticMatrix>>,
     pub fabric: Arc<WovenFabric>,
     pub laminate: Laminate,
-    /// Bending rigidity of the ply per unit width (MODEL.md §4); absent: a membrane.
+    /// Bending rigidity of the ply per unit width (docs/model.md §4); absent: a membrane.
     pub bending: Option<BendingRigidity>,
 }
 
@@ -91,7 +91,7 @@ struct FabricSection {
     shear: Vec<f64>,
 }
 
-/// MODEL.md §3: yarn compression stiffness defaults to 1e-3 of the initial tensile one.
+/// docs/model.md §3: yarn compression stiffness defaults to 1e-3 of the initial tensile one.
 fn default_compression_fraction() -> f64 {
     1e-3
 }

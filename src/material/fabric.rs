@@ -1,5 +1,5 @@
 //! Layer B: impregnated woven fabric, anisotropic hyperelastic with fibre–fibre–matrix
-//! interaction (MODEL.md §3; seed Eqs. (10)–(11)).
+//! interaction (docs/model.md §3; Eqs. (10)–(11) of Gong et al. 2018).
 //!
 //! `W = W_t,warp(I4) + W_t,weft(I6) + W_s(I10)`, energy per unit reference volume of layer B:
 //! - yarn tension `W_t(I) = sum_k (A_k / k) (sqrt(I) - 1)^k`, `k = 2..n`, for `sqrt(I) > 1`;
@@ -133,7 +133,7 @@ impl ShearInteraction {
     }
 
     /// Normalised shear force of a pure-shear (trellis) deformation of a layer of thickness
-    /// `thickness`, MODEL.md §5: `F_sh = 2 t sin(gamma) W_s'(sin^2 gamma)` (N/mm).
+    /// `thickness`, docs/model.md §5: `F_sh = 2 t sin(gamma) W_s'(sin^2 gamma)` (N/mm).
     pub fn normalised_shear_force(&self, thickness: f64, gamma: f64) -> f64 {
         let s = gamma.sin();
         2.0 * thickness * s * self.derivative(s * s)
@@ -147,7 +147,7 @@ pub struct WovenFabric {
     pub shear: ShearInteraction,
 }
 
-/// Fibre invariants of seed Eq. (11) used by the energy.
+/// Fibre invariants of Eq. (11) of Gong et al. 2018 used by the energy.
 #[derive(Clone, Copy, Debug)]
 struct FibreInvariants {
     i4: f64,
@@ -179,13 +179,13 @@ impl FibreInvariants {
         })
     }
 
-    /// `I10 = I8^2 / (I4 I6) = cos^2(theta) = sin^2(gamma)` (MODEL.md §3).
+    /// `I10 = I8^2 / (I4 I6) = cos^2(theta) = sin^2(gamma)` (docs/model.md §3).
     fn i10(&self) -> f64 {
         self.i8 * self.i8 / (self.i4 * self.i6)
     }
 }
 
-/// Shear angle `gamma = pi/2 - theta`, `cos(theta) = I8 / sqrt(I4 I6)` (MODEL.md §1), radians.
+/// Shear angle `gamma = pi/2 - theta`, `cos(theta) = I8 / sqrt(I4 I6)` (docs/model.md §1), radians.
 ///
 /// Positive when the yarns close up from 90°.
 pub fn shear_angle(c: &Matrix3<f64>, fibres: &FibreDirections) -> f64 {
@@ -214,7 +214,7 @@ impl MaterialLaw for WovenFabric {
         ThicknessRule::VolumeConserving
     }
 
-    /// MODEL.md §3: `S = 2 W4 a0(x)a0 + 2 W6 b0(x)b0 + W8 (a0(x)b0 + b0(x)a0)`.
+    /// docs/model.md §3: `S = 2 W4 a0(x)a0 + 2 W6 b0(x)b0 + W8 (a0(x)b0 + b0(x)a0)`.
     fn second_piola_kirchhoff(
         &self,
         point: &PointKinematics,
@@ -223,7 +223,7 @@ impl MaterialLaw for WovenFabric {
         let inv = FibreInvariants::of(&point.c, &point.fibres)?;
         let ws = self.shear.derivative(inv.i10());
         let i8_sq = inv.i8 * inv.i8;
-        // dI10/dI4, dI10/dI6, dI10/dI8 (MODEL.md §3)
+        // dI10/dI4, dI10/dI6, dI10/dI8 (docs/model.md §3)
         let w4 =
             self.warp.derivative_wrt_invariant(inv.i4) - ws * i8_sq / (inv.i4 * inv.i4 * inv.i6);
         let w6 =

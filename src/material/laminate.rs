@@ -1,4 +1,4 @@
-//! The lamination model A:B:A (MODEL.md §4): perfectly bonded layers sharing the in-plane
+//! The lamination model A:B:A (docs/model.md §4): perfectly bonded layers sharing the in-plane
 //! deformation, each in plane stress, summed into the membrane resultant `N = sum_k t_k S2_k`.
 //!
 //! State variables, per layer `k`: the thickness stretch `lambda3_k` and its rate at the end of
@@ -41,7 +41,7 @@ struct LayerSolution {
 }
 
 /// In-plane kinematics of the sheet in an orthonormal local basis `(e1, e2)` of the reference
-/// tangent plane (MODEL.md §1).
+/// tangent plane (docs/model.md §1).
 #[derive(Clone, Copy, Debug)]
 pub struct MembraneKinematics {
     /// `C2 = F^T F` (2x2).
@@ -71,7 +71,7 @@ impl MembraneKinematics {
         }
     }
 
-    /// A layer's 3D kinematics, `C = diag-block(C2, lambda3^2)` (MODEL.md §1).
+    /// A layer's 3D kinematics, `C = diag-block(C2, lambda3^2)` (docs/model.md §1).
     pub fn layer_point(&self, lambda3: f64, lambda3_rate: f64) -> PointKinematics {
         let mut c = Matrix3::zeros();
         let mut c_dot = Matrix3::zeros();
@@ -98,7 +98,7 @@ pub struct LaminateState {
 /// Membrane response of the laminate at one point.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MembraneResponse {
-    /// 2nd Piola–Kirchhoff membrane resultant per unit reference width (N/mm), MODEL.md §4.
+    /// 2nd Piola–Kirchhoff membrane resultant per unit reference width (N/mm), docs/model.md §4.
     pub n: Matrix2<f64>,
     /// Current thickness `t = sum_k t_k lambda3_k` (mm).
     pub thickness: f64,
@@ -175,7 +175,7 @@ impl Laminate {
     }
 
     /// Advances `state` to the kinematics `kin`, reached `dt` seconds after the state's, and
-    /// returns the membrane resultant and thickness (MODEL.md §4).
+    /// returns the membrane resultant and thickness (docs/model.md §4).
     ///
     /// Each layer's thickness stretch follows its [`ThicknessRule`]; with `dt = 0` the
     /// thickness rate is taken as zero.
@@ -298,7 +298,7 @@ impl Laminate {
         Ok(response.n[(0, 1)] / (self.reference_thickness() * GAMMA))
     }
 
-    /// The laminate for a process run `speed_up` times faster (MODEL.md §6): every law
+    /// The laminate for a process run `speed_up` times faster (docs/model.md §6): every law
     /// time-scaled, layers that shared a law still sharing one.
     pub fn time_scaled(&self, speed_up: f64) -> Self {
         self.with_laws(|law| law.time_scaled(speed_up))

@@ -1,5 +1,5 @@
 //! Layer A: molten thermoplastic matrix, temperature-dependent visco-hyperelastic law
-//! (MODEL.md §2; seed Eqs. (5)–(9)).
+//! (docs/model.md §2; Eqs. (5)–(9) of Gong et al. 2018).
 //!
 //! Parameters (each a [`TemperatureTable`]):
 //! - `C10(T)`, MPa — neo-Hookean shear parameter (initial shear modulus `2 C10`);
@@ -60,7 +60,7 @@ struct Invariants {
 }
 
 impl Invariants {
-    // seed Eq. (3)
+    // Eq. (3) of Gong et al. 2018
     fn of(c: &Matrix3<f64>) -> Result<Self, MaterialError> {
         let i3 = c.determinant();
         if i3.is_nan() || i3 <= 0.0 {
@@ -157,7 +157,7 @@ impl ViscoHyperelasticMatrix {
     }
 }
 
-/// Elastic stress, seed Eq. (8):
+/// Elastic stress, Eq. (8) of Gong et al. 2018:
 /// `S_e = 2 C10 I3^(-1/3) (I - I1/3 C^-1) + (2/D1) (I3 - I3^(1/2)) C^-1`.
 fn elastic_stress(p: &MatrixParameters, c: &Matrix3<f64>, inv: &Invariants) -> Matrix3<f64> {
     let c_inv = c.try_inverse().unwrap_or_else(Matrix3::zeros);
@@ -177,7 +177,7 @@ fn elastic_stress_33(p: &MatrixParameters, c: &Matrix3<f64>, inv: &Invariants) -
     deviatoric + volumetric
 }
 
-/// `dS33/dC33` of seed Eq. (8), the other components of `C` held. With the cofactor
+/// `dS33/dC33` of Eq. (8) of Gong et al. 2018, the other components of `C` held. With the cofactor
 /// `k = C11 C22 - C12 C21` of `C33`, `c = (C^-1)33 = k / I3` and `J3 = I3^(-1/3)`:
 /// `dI3 = k`, `dI1 = 1`, `dc = -c^2`, `dJ3 = -J3 c / 3`, so
 /// `d(deviatoric) = -(2/3) C10 J3 c (2 - (4/3) c I1)` and
@@ -196,7 +196,7 @@ fn elastic_tangent_33(p: &MatrixParameters, c: &Matrix3<f64>, inv: &Invariants) 
     deviatoric + volumetric
 }
 
-/// Viscous stress, seed Eq. (9): `S_v = 2 eta1 (I1 - 3) Cdot`.
+/// Viscous stress, Eq. (9) of Gong et al. 2018: `S_v = 2 eta1 (I1 - 3) Cdot`.
 fn viscous_stress(p: &MatrixParameters, c_dot: &Matrix3<f64>, inv: &Invariants) -> Matrix3<f64> {
     c_dot * (2.0 * p.eta1 * (inv.i1 - 3.0))
 }
@@ -220,7 +220,7 @@ impl MaterialLaw for ViscoHyperelasticMatrix {
         Ok(elastic_stress(&p, &point.c, &inv) + viscous_stress(&p, &point.c_dot, &inv))
     }
 
-    /// seed Eqs. (8)–(9), the `33` component only.
+    /// Eqs. (8)–(9) of Gong et al. 2018, the `33` component only.
     fn through_thickness_stress(&self, point: &PointKinematics) -> Result<f64, MaterialError> {
         ensure_finite(self.name(), point)?;
         let p = self.parameters_at(point.temperature)?;
@@ -229,9 +229,9 @@ impl MaterialLaw for ViscoHyperelasticMatrix {
         Ok(elastic_stress_33(&p, &point.c, &inv) + viscous)
     }
 
-    /// The stress of seed Eqs. (8)–(9) with `elastic_tangent_33` plus the viscous part of
-    /// the tangent, seed Eq. (9): `dS33/dC33 = 2 eta1 Cdot33` (through `I1`) and
-    /// `dS33/dCdot33 = 2 eta1 (I1 - 3)`; the invariants and parameters are shared.
+    /// The stress of Eqs. (8)–(9) of Gong et al. 2018 with `elastic_tangent_33` plus the viscous
+    /// part of the tangent, Eq. (9) of Gong et al. 2018: `dS33/dC33 = 2 eta1 Cdot33` (through `I1`)
+    /// and `dS33/dCdot33 = 2 eta1 (I1 - 3)`; the invariants and parameters are shared.
     fn stress_with_through_thickness_tangent(
         &self,
         point: &PointKinematics,
@@ -247,7 +247,8 @@ impl MaterialLaw for ViscoHyperelasticMatrix {
         Ok((s, Some(tangent)))
     }
 
-    /// seed Eq. (5): `W_e = C10 (I1bar - 3) + (J - 1)^2 / D1`, `I1bar = J^(-2/3) I1`.
+    /// Eq. (5) of Gong et al. 2018: `W_e = C10 (I1bar - 3) + (J - 1)^2 / D1`, `I1bar = J^(-2/3)
+    /// I1`.
     fn strain_energy(&self, point: &PointKinematics) -> Result<f64, MaterialError> {
         ensure_finite(self.name(), point)?;
         let p = self.parameters_at(point.temperature)?;
@@ -265,9 +266,9 @@ impl MaterialLaw for ViscoHyperelasticMatrix {
         Ok(16.0 * c10 * (point.c.trace() / 3.0).max(1.0))
     }
 
-    /// seed Eq. (9) with `Cdot = 2 Edot`: `S_v = 4 eta1 (I1 - 3) Edot`, a 3D viscosity of
-    /// `eta' = 4 eta1 |I1 - 3|` (its sign, negative for `I1 < 3`, does not matter for the step).
-    /// In plane stress the nearly incompressible melt thins as it stretches,
+    /// Eq. (9) of Gong et al. 2018 with `Cdot = 2 Edot`: `S_v = 4 eta1 (I1 - 3) Edot`, a 3D
+    /// viscosity of `eta' = 4 eta1 |I1 - 3|` (its sign, negative for `I1 < 3`, does not matter for
+    /// the step). In plane stress the nearly incompressible melt thins as it stretches,
     /// `Edot33 = -(Edot11 + Edot22)`, and the in-plane viscosity is
     /// `eta' [[2, 1], [1, 2]]`: three times `eta'` for equibiaxial stretching.
     fn viscous_modulus(&self, point: &PointKinematics) -> Result<f64, MaterialError> {
@@ -286,7 +287,7 @@ impl MaterialLaw for ViscoHyperelasticMatrix {
         })
     }
 
-    /// MODEL.md §6: `eta1 / s`, so the viscous stress at `s` times the rate is unchanged.
+    /// docs/model.md §6: `eta1 / s`, so the viscous stress at `s` times the rate is unchanged.
     /// The pinned parameters are interpolated again from the scaled table, as any lookup is.
     fn time_scaled(&self, speed_up: f64) -> Arc<dyn MaterialLaw> {
         let scaled = Self {
@@ -303,7 +304,7 @@ impl MaterialLaw for ViscoHyperelasticMatrix {
         Some(Arc::new(self.clone().pinned_at(temperature)))
     }
 
-    /// seed Eq. (6): `psi_v = eta1 J2 (I1 - 3)`, `J2 = tr(Cdot^2) / 2` (Eq. (4)).
+    /// Eq. (6) of Gong et al. 2018: `psi_v = eta1 J2 (I1 - 3)`, `J2 = tr(Cdot^2) / 2` (Eq. (4)).
     fn viscous_potential(&self, point: &PointKinematics) -> Result<f64, MaterialError> {
         ensure_finite(self.name(), point)?;
         let p = self.parameters_at(point.temperature)?;

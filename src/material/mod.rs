@@ -1,4 +1,4 @@
-//! Constitutive laws of the prepreg (MODEL.md §2–§4).
+//! Constitutive laws of the prepreg (docs/model.md §2–§4).
 //!
 //! Every layer law implements [`MaterialLaw`]: given the right Cauchy–Green tensor `C`, its
 //! rate `Cdot`, the temperature and the fibre directions of one material point, it returns the
@@ -23,7 +23,7 @@ use nalgebra::{Matrix3, Vector3};
 use std::fmt::Debug;
 use std::sync::Arc;
 
-/// Warp and weft directions `a0`, `b0` in the reference configuration (MODEL.md §1).
+/// Warp and weft directions `a0`, `b0` in the reference configuration (docs/model.md §1).
 ///
 /// Unit vectors in the reference tangent plane; they are material directions, so the current
 /// yarns are `a = F a0` and `b = F b0` (non-orthogonal fibre tracking).
@@ -53,9 +53,9 @@ impl Default for FibreDirections {
 /// Everything a layer law needs at one material point.
 #[derive(Clone, Copy, Debug)]
 pub struct PointKinematics {
-    /// Right Cauchy–Green tensor `C = F^T F`, seed Eq. (1).
+    /// Right Cauchy–Green tensor `C = F^T F`, Eq. (1) of Gong et al. 2018.
     pub c: Matrix3<f64>,
-    /// Its material rate `Cdot = Fdot^T F + F^T Fdot`, seed Eq. (2).
+    /// Its material rate `Cdot = Fdot^T F + F^T Fdot`, Eq. (2) of Gong et al. 2018.
     pub c_dot: Matrix3<f64>,
     /// Temperature, °C.
     pub temperature: f64,
@@ -73,7 +73,7 @@ impl PointKinematics {
         }
     }
 
-    /// Kinematics from the deformation gradient and its rate, seed Eqs. (1)–(2).
+    /// Kinematics from the deformation gradient and its rate, Eqs. (1)–(2) of Gong et al. 2018.
     pub fn from_deformation(
         f: &Matrix3<f64>,
         f_dot: &Matrix3<f64>,
@@ -90,7 +90,7 @@ impl PointKinematics {
 }
 
 /// How a layer's thickness stretch `lambda3` follows from the in-plane deformation when the
-/// layer is part of a thin sheet (MODEL.md §2 and §3).
+/// layer is part of a thin sheet (docs/model.md §2 and §3).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ThicknessRule {
     /// `lambda3` is solved so that the through-thickness stress `S33` vanishes.
@@ -168,7 +168,7 @@ pub trait MaterialLaw: Debug + Send + Sync {
         None
     }
 
-    /// This law for a process run `speed_up` times faster than the real one (MODEL.md §6,
+    /// This law for a process run `speed_up` times faster than the real one (docs/model.md §6,
     /// time scaling): rate-dependent parameters change so that the response at the scaled
     /// rate equals the real response at the real rate.
     fn time_scaled(&self, speed_up: f64) -> Arc<dyn MaterialLaw>;

@@ -1,5 +1,5 @@
 //! Safeguarded Newton iteration for a stretch that makes one stress component vanish: the
-//! plane-stress thickness stretch of a layer (MODEL.md §2, (choice)) or the lateral stretch of
+//! plane-stress thickness stretch of a layer (docs/model.md §2, (choice)) or the lateral stretch of
 //! a uniaxial-stress test.
 
 use super::MaterialError;

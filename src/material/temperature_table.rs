@@ -1,4 +1,4 @@
-//! Temperature-dependent parameters as piecewise-linear tables (MODEL.md §2, (choice)).
+//! Temperature-dependent parameters as piecewise-linear tables (docs/model.md §2, (choice)).
 
 use super::MaterialError;
 

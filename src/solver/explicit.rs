@@ -1,4 +1,4 @@
-//! Central-difference integration of the sheet (MODEL.md §6).
+//! Central-difference integration of the sheet (docs/model.md §6).
 //!
 //! Leapfrog with lumped mass: `a_n = -M^-1 f_int(x_n, v_{n-1/2})`,
 //! `v_{n+1/2} = v_{n-1/2} + (dt_{n-1/2} + dt_{n+1/2})/2 a_n`, `x_{n+1} = x_n + dt_{n+1/2} v_{n+1/2}`.

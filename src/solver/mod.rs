@@ -1,4 +1,4 @@
-//! Explicit dynamics of the sheet (MODEL.md §6): central differences with lumped mass, stable
+//! Explicit dynamics of the sheet (docs/model.md §6): central differences with lumped mass, stable
 //! step from the current wave speed, optional mass scaling, energy bookkeeping.
 
 pub mod energy;

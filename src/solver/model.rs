@@ -164,7 +164,7 @@ impl Model {
     }
 
     /// The same sheet with bending stiffness: a rotation-free bending patch per triangle
-    /// (MODEL.md §4, `element::bending_triangle`), the reference mesh's curvature at rest.
+    /// (docs/model.md §4, `element::bending_triangle`), the reference mesh's curvature at rest.
     pub fn with_bending(mut self, rigidity: BendingRigidity) -> Result<Self, ModelError> {
         self.bending = Some(Bending::new(&self.mesh, &self.elements, rigidity)?);
         Ok(self)

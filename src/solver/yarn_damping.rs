@@ -1,7 +1,7 @@
 //! Linear viscosity on the yarn strain rates: the membrane counterpart of the linear bulk
 //! viscosity of explicit codes.
 //!
-//! Why: a yarn is ~1000 times stiffer in tension than in compression (MODEL.md §3), so a yarn
+//! Why: a yarn is ~1000 times stiffer in tension than in compression (docs/model.md §3), so a yarn
 //! that chatters about its rest length switches stiffness within a step. Central differences
 //! are not energy-conserving across such a kink: on fine meshes of a bias-extension specimen
 //! (7.5 mm cells) the yarn modes slowly gain energy until the run is ruined, while a linear
