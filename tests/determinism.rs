@@ -17,9 +17,18 @@ fn out_dir(name: &str) -> PathBuf {
 /// Runs `thermostamp <args> --threads <threads> --output <dir>`, asserts success and returns
 /// its standard error.
 fn run_on_threads(args: &[&str], threads: &str, dir: &Path) -> String {
-    let out = thermostamp(&[args, &["--threads", threads, "--output", dir.to_str().unwrap()]].concat());
+    let out = thermostamp(
+        &[
+            args,
+            &["--threads", threads, "--output", dir.to_str().unwrap()],
+        ]
+        .concat(),
+    );
     let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
-    assert!(out.status.success(), "{args:?} on {threads} threads: {stderr}");
+    assert!(
+        out.status.success(),
+        "{args:?} on {threads} threads: {stderr}"
+    );
     stderr
 }
 
@@ -34,9 +43,18 @@ fn assert_same_files(a: &Path, b: &Path) -> Vec<String> {
         names
     };
     let files = names(a);
-    assert_eq!(files, names(b), "{} and {} hold other files", a.display(), b.display());
+    assert_eq!(
+        files,
+        names(b),
+        "{} and {} hold other files",
+        a.display(),
+        b.display()
+    );
     for name in &files {
-        let (x, y) = (std::fs::read(a.join(name)).unwrap(), std::fs::read(b.join(name)).unwrap());
+        let (x, y) = (
+            std::fs::read(a.join(name)).unwrap(),
+            std::fs::read(b.join(name)).unwrap(),
+        );
         if x != y {
             let line = String::from_utf8_lossy(&x)
                 .lines()
@@ -109,7 +127,15 @@ fn forming_run_is_bit_identical_on_one_and_two_threads() {
     let rows = assert_finite_cells(&one.join("forming.csv"));
     assert!(rows >= 6, "{rows} rows");
     let last = std::fs::read_to_string(one.join("forming.csv")).unwrap();
-    let punch: f64 = last.lines().last().unwrap().split(',').nth(2).unwrap().parse().unwrap();
+    let punch: f64 = last
+        .lines()
+        .last()
+        .unwrap()
+        .split(',')
+        .nth(2)
+        .unwrap()
+        .parse()
+        .unwrap();
     assert!(punch > 0.1, "the punch pushes the blank: {punch} N");
 }
 
@@ -169,7 +195,14 @@ fn uniaxial_and_picture_frame_histories_are_finite() {
     let tests: [(&str, &[&str]); 2] = [
         (
             "uniaxial",
-            &["--ply-angle", "-90", "--end-displacement", "1.5", "--speed", "200"],
+            &[
+                "--ply-angle",
+                "-90",
+                "--end-displacement",
+                "1.5",
+                "--speed",
+                "200",
+            ],
         ),
         (
             "picture-frame",
