@@ -12,19 +12,40 @@ pub const SCENARIO_REFERENCE: &str =
      section \"Scenario file\". Tutorials: examples/hemisphere.toml, examples/double-dome.toml,\n\
      examples/hemisphere-quarter.toml.";
 
-/// Runs `job` on `threads` worker threads (default: all cores).
+/// Runs `job` on `threads` worker threads (default: all cores); more threads than the machine
+/// has cores are cut to the cores, with a note on standard error.
 pub fn with_threads(
     threads: Option<usize>,
     job: impl FnOnce() -> anyhow::Result<()> + Send,
 ) -> anyhow::Result<()> {
-    match threads {
-        None => job(),
-        Some(0) => anyhow::bail!("--threads must be at least 1"),
-        Some(n) => rayon::ThreadPoolBuilder::new()
-            .num_threads(n)
-            .build()
-            .context("cannot start the worker threads")?
-            .install(job),
+    let Some(requested) = threads else {
+        return job();
+    };
+    let cores = std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get);
+    let (n, note) = thread_count(requested, cores)?;
+    if let Some(note) = note {
+        eprintln!("{note}");
+    }
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(n)
+        .build()
+        .context("cannot start the worker threads")?
+        .install(job)
+}
+
+/// The worker threads to start for `--threads requested` on a machine with `cores` cores, and
+/// the note to print when it is cut down: threads beyond the cores only slow the run (and
+/// tens of thousands of them exhaust the machine).
+fn thread_count(requested: usize, cores: usize) -> anyhow::Result<(usize, Option<String>)> {
+    match requested {
+        0 => anyhow::bail!("--threads must be at least 1"),
+        n if n > cores => Ok((
+            cores,
+            Some(format!(
+                "note: --threads {n} is more than the {cores} cores of this machine; using {cores}"
+            )),
+        )),
+        n => Ok((n, None)),
     }
 }
 
@@ -94,5 +115,24 @@ impl ScenarioArgs {
             .clone()
             .unwrap_or_else(|| scenario.output.folder.clone());
         Ok((scenario, dir))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn threads_are_cut_to_the_cores_and_zero_is_refused() {
+        assert_eq!(thread_count(2, 4).unwrap(), (2, None));
+        assert_eq!(thread_count(4, 4).unwrap(), (4, None));
+        let (n, note) = thread_count(100_000, 2).unwrap();
+        assert_eq!(n, 2);
+        assert_eq!(
+            note.as_deref(),
+            Some("note: --threads 100000 is more than the 2 cores of this machine; using 2")
+        );
+        let e = thread_count(0, 2).unwrap_err().to_string();
+        assert!(e.contains("--threads"), "{e}");
     }
 }

@@ -70,7 +70,9 @@ struct NodeMotion {
 
 /// Contact forces on every node for the step `dt` about to be taken, from the tools placed at
 /// `translations` and moving at `tool_velocities`; updates `contacts` (one per node) and
-/// returns the load on each tool.
+/// returns the load on each tool. The nodes go in parallel in chunks of [`NODE_CHUNK`], each
+/// summed in node order and the chunks' loads added in order: the loads drive the holder and
+/// give the punch force, so their rounding must not depend on the thread count.
 pub fn evaluate(
     tools: &[RigidTool],
     (translations, tool_velocities): (&[Vector3<f64>], &[Vector3<f64>]),
@@ -79,42 +81,73 @@ pub fn evaluate(
     settings: &ContactSettings,
     contacts: &mut [NodeContact],
 ) -> Vec<ToolLoad> {
-    let empty = || vec![ToolLoad::default(); tools.len()];
-    contacts
-        .par_iter_mut()
+    let chunks: Vec<Vec<ToolLoad>> = contacts
+        .par_chunks_mut(NODE_CHUNK)
         .enumerate()
-        .fold(empty, |mut loads, (a, contact)| {
-            let node = &NodeMotion {
-                position: nodes.positions[a],
-                velocity: nodes.velocities[a],
-                mass: nodes.masses[a],
-            };
-            contact.force = Vector3::zeros();
-            contact.tangential.resize(tools.len(), Vector3::zeros());
-            contact.normal_force.resize(tools.len(), 0.0);
-            contact.near.resize(tools.len(), NearTriangles::default());
-            for (k, tool) in tools.iter().enumerate() {
-                let moving = (translations[k], tool_velocities[k]);
-                let f = node_tool_force(tool, moving, node, dt, settings, contact, k);
-                contact.force += f;
-                if contact.normal_force[k] > 0.0 {
-                    loads[k].force -= f;
-                    loads[k].normal_force += contact.normal_force[k];
-                    loads[k].stiffness += penalty_stiffness(node.mass, dt, settings);
-                    loads[k].nodes_in_contact += 1;
-                }
+        .map(|(c, chunk)| {
+            let mut loads = vec![ToolLoad::default(); tools.len()];
+            for (i, contact) in chunk.iter_mut().enumerate() {
+                let a = c * NODE_CHUNK + i;
+                let node = &NodeMotion {
+                    position: nodes.positions[a],
+                    velocity: nodes.velocities[a],
+                    mass: nodes.masses[a],
+                };
+                node_contact(
+                    tools,
+                    (translations, tool_velocities),
+                    node,
+                    dt,
+                    settings,
+                    contact,
+                    &mut loads,
+                );
             }
             loads
         })
-        .reduce(empty, |mut a, b| {
-            for (x, y) in a.iter_mut().zip(b) {
-                x.force += y.force;
-                x.normal_force += y.normal_force;
-                x.stiffness += y.stiffness;
-                x.nodes_in_contact += y.nodes_in_contact;
-            }
-            a
-        })
+        .collect();
+    let mut total = vec![ToolLoad::default(); tools.len()];
+    for chunk in chunks {
+        for (x, y) in total.iter_mut().zip(chunk) {
+            x.force += y.force;
+            x.normal_force += y.normal_force;
+            x.stiffness += y.stiffness;
+            x.nodes_in_contact += y.nodes_in_contact;
+        }
+    }
+    total
+}
+
+/// Nodes per chunk of the parallel load sums: fixed, so that the sums do not depend on the
+/// thread count.
+const NODE_CHUNK: usize = 256;
+
+/// The contact of one node with every tool: updates `contact` and adds the node's share to
+/// `loads` (one per tool).
+fn node_contact(
+    tools: &[RigidTool],
+    (translations, tool_velocities): (&[Vector3<f64>], &[Vector3<f64>]),
+    node: &NodeMotion,
+    dt: f64,
+    settings: &ContactSettings,
+    contact: &mut NodeContact,
+    loads: &mut [ToolLoad],
+) {
+    contact.force = Vector3::zeros();
+    contact.tangential.resize(tools.len(), Vector3::zeros());
+    contact.normal_force.resize(tools.len(), 0.0);
+    contact.near.resize(tools.len(), NearTriangles::default());
+    for (k, tool) in tools.iter().enumerate() {
+        let moving = (translations[k], tool_velocities[k]);
+        let f = node_tool_force(tool, moving, node, dt, settings, contact, k);
+        contact.force += f;
+        if contact.normal_force[k] > 0.0 {
+            loads[k].force -= f;
+            loads[k].normal_force += contact.normal_force[k];
+            loads[k].stiffness += penalty_stiffness(node.mass, dt, settings);
+            loads[k].nodes_in_contact += 1;
+        }
+    }
 }
 
 /// The contact spring `k = s m / dt^2` of a node of mass `m` (N/mm).

@@ -120,13 +120,17 @@ impl Bending {
         rigidity.validate()?;
         check_manifold(mesh)?;
         let around = triangles_around_nodes(mesh);
-        let triangles = elements
+        let patches: Vec<Option<BendingTriangle>> = elements
             .par_iter()
             .enumerate()
-            .map(|(k, e)| {
-                let patch = patch_nodes(mesh, &around, k);
-                BendingTriangle::new(mesh, e, patch).ok_or(BendingError::SingularPatch(k))
-            })
+            .map(|(k, e)| BendingTriangle::new(mesh, e, patch_nodes(mesh, &around, k)))
+            .collect();
+        // in order, so that of several singular patches the same one is named on any thread
+        // count
+        let triangles = patches
+            .into_iter()
+            .enumerate()
+            .map(|(k, t)| t.ok_or(BendingError::SingularPatch(k)))
             .collect::<Result<Vec<_>, _>>()?;
         Ok(Self {
             rigidity,

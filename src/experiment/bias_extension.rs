@@ -2,7 +2,10 @@
 //! its length, clamped at both ends, pulled at constant crosshead speed. The central zone
 //! shears like a pin-jointed net, `gamma = 90° - 2 arccos((D + d)/(sqrt(2) D))`.
 
-use super::kinematics::{bias_extension_normalised_shear_force, bias_extension_shear_angle};
+use super::kinematics::{
+    bias_extension_normalised_shear_force, bias_extension_normalised_shear_force_at_zero_shear,
+    bias_extension_shear_angle,
+};
 use super::sheet_test::{
     clamped_strip, clamped_strip_measurement, validate_strip, Measurement, SheetTest, SheetTestRun,
     TestProcess, TestRun,
@@ -33,7 +36,8 @@ pub struct BiasRow {
     pub shear_angle: f64,
     /// Pin-jointed prediction (degrees).
     pub shear_angle_pin_jointed: f64,
-    /// Normalised shear force from the force curve (N/mm), Cao et al. 2008; NaN at d = 0.
+    /// Normalised shear force from the force curve (N/mm), Cao et al. 2008; at d = 0 its limit
+    /// at zero shear (0 for the specimen at rest).
     pub normalised_shear_force: f64,
 }
 
@@ -160,7 +164,11 @@ impl SheetTest for BiasExtension {
                     normalised_shear_force: if d > 0.0 {
                         f_sh.next().map_or(f64::NAN, |p| p.1)
                     } else {
-                        f64::NAN
+                        bias_extension_normalised_shear_force_at_zero_shear(
+                            self.width,
+                            self.length,
+                            r.reading.force,
+                        )
                     },
                 }
             })

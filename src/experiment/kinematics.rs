@@ -59,6 +59,18 @@ pub fn bias_extension_normalised_shear_force(
     found
 }
 
+/// The limit of [`bias_extension_normalised_shear_force`] at zero displacement, where the
+/// central zone is not sheared: with `F_sh` proportional to `g` near 0,
+/// `F_sh(0) = (H/W - 1) F / (2H - 3W + W/2)`. Zero for a specimen at rest (`F = 0`).
+pub fn bias_extension_normalised_shear_force_at_zero_shear(
+    width: f64,
+    length: f64,
+    force: f64,
+) -> f64 {
+    let (w, h) = (width, length);
+    (h / w - 1.0) * force / (2.0 * h - 3.0 * w + 0.5 * w)
+}
+
 /// Linear interpolation in increasing `(x, y)` points; `None` outside them.
 fn interpolate(points: &[(f64, f64)], x: f64) -> Option<f64> {
     let i = points.partition_point(|p| p.0 < x);
@@ -93,6 +105,25 @@ pub fn picture_frame_normalised_force(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn bias_extension_shear_force_at_zero_is_the_limit_of_small_displacements() {
+        let (w, h, force) = (150.0, 450.0, 2.5);
+        let at_zero = bias_extension_normalised_shear_force_at_zero_shear(w, h, force);
+        // (450/150 - 1) 2.5 / (900 - 450 + 75)
+        assert!((at_zero - 5.0 / 525.0).abs() < 1e-15, "{at_zero}");
+        for d in [1e-3, 1e-5, 1e-7] {
+            let f_sh = bias_extension_normalised_shear_force(w, h, &[d], &[force])[0].1;
+            assert!(
+                (f_sh - at_zero).abs() < 2.0 * d * at_zero,
+                "d = {d}: {f_sh} against {at_zero}"
+            );
+        }
+        assert_eq!(
+            bias_extension_normalised_shear_force_at_zero_shear(w, h, 0.0),
+            0.0
+        );
+    }
 
     #[test]
     fn bias_extension_angle_starts_at_zero_and_inverts() {

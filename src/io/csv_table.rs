@@ -143,14 +143,20 @@ fn parse_number(cell: &str, column: &str, origin: &str, line: usize) -> Result<f
     }
 }
 
-/// Writes a header and rows of numbers as CSV, with 10 significant digits.
+/// Writes a header and rows of numbers as CSV, with 10 significant digits. A NaN or an
+/// infinity is refused (`InvalidData`, naming the column and the row) rather than written:
+/// the rows before it are kept.
 pub fn write_csv<W: Write, R: AsRef<[f64]>>(
     out: &mut W,
     header: &[&str],
     rows: impl IntoIterator<Item = R>,
 ) -> std::io::Result<()> {
     writeln!(out, "{}", header.join(","))?;
-    for row in rows {
+    for (i, row) in rows.into_iter().enumerate() {
+        if let Err(e) = check_finite_row(header, i + 1, row.as_ref()) {
+            out.flush()?;
+            return Err(e);
+        }
         let cells: Vec<String> = row
             .as_ref()
             .iter()
@@ -159,6 +165,24 @@ pub fn write_csv<W: Write, R: AsRef<[f64]>>(
         writeln!(out, "{}", cells.join(","))?;
     }
     out.flush()
+}
+
+/// Data row `row` (1-based; line `row + 1` of the file) must hold only finite numbers: a NaN
+/// or an infinity in a result file is a failure to report, never a cell for other tools to
+/// choke on.
+pub fn check_finite_row(header: &[&str], row: usize, values: &[f64]) -> std::io::Result<()> {
+    match values.iter().position(|v| !v.is_finite()) {
+        None => Ok(()),
+        Some(j) => Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!(
+                "column '{}', row {row} (line {}): {} is not a finite number",
+                header.get(j).copied().unwrap_or("?"),
+                row + 1,
+                values[j]
+            ),
+        )),
+    }
 }
 
 /// `v` rounded to 10 significant digits, in its shortest exponent form (`1.8e0`, `-2.5e-7`).
@@ -208,6 +232,20 @@ mod tests {
         assert!(e.to_string().contains("missing column 'c'"), "{e}");
         let e = parse_csv_columns("a,b,c\n1,2\n", "h.csv", &["a"]).unwrap_err();
         assert_eq!(e.line, Some(2));
+    }
+
+    #[test]
+    fn a_non_finite_value_is_refused_naming_column_and_row() {
+        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            let mut out = Vec::new();
+            let e = write_csv(&mut out, &["x", "y"], [[1.0, 2.0], [3.0, bad]]).unwrap_err();
+            assert_eq!(e.kind(), std::io::ErrorKind::InvalidData);
+            assert_eq!(
+                e.to_string(),
+                format!("column 'y', row 2 (line 3): {bad} is not a finite number")
+            );
+            assert_eq!(std::str::from_utf8(&out).unwrap(), "x,y\n1e0,2e0\n");
+        }
     }
 
     #[test]

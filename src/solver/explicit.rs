@@ -380,9 +380,10 @@ fn gather_forces(forces: &InternalForces, nodal: &mut [Vector3<f64>]) {
 }
 
 /// Elastic energy stored in the sheet, `sum_e A0 sum_k t_k W_k` plus the hinges' bending
-/// energy.
+/// energy. The per-element energies are computed in parallel and summed in element order, so
+/// the total is the same on any thread count (it is only needed at the records).
 fn elastic_energy(model: &Model, state: &State) -> Result<f64, (usize, MaterialError)> {
-    let membrane = model
+    let membrane: Vec<Result<f64, (usize, MaterialError)>> = model
         .elements
         .par_iter()
         .enumerate()
@@ -396,12 +397,15 @@ fn elastic_energy(model: &Model, state: &State) -> Result<f64, (usize, MaterialE
                 .map_err(|err| (k, err))?;
             Ok(e.area * w)
         })
-        .try_reduce(|| 0.0, |a, b| Ok(a + b))?;
+        .collect();
+    let membrane: f64 = membrane.into_iter().sum::<Result<f64, _>>()?;
     let bending: f64 = model.bending.as_ref().map_or(0.0, |b| {
-        b.triangles
+        let energies: Vec<f64> = b
+            .triangles
             .par_iter()
             .map(|t| b.energy(t, &state.positions))
-            .sum()
+            .collect();
+        energies.iter().sum()
     });
     Ok(membrane + bending)
 }
@@ -686,7 +690,9 @@ fn rest_kinematics(model: &Model, k: usize) -> MembraneKinematics {
 
 /// Membrane forces of every element at the current positions (in parallel), the stable step
 /// they allow and the power of the yarn-rate damping `xi`. `dt` is the duration of the step
-/// that led here (for the thickness rate).
+/// that led here (for the thickness rate). The elements go in chunks of [`CHUNK`], each summed
+/// in order and the chunks' sums added in order, so the power is the same on any thread
+/// count; a failure is that of the lowest-numbered failing element.
 fn element_loop(
     model: &Model,
     state: &mut State,
@@ -698,40 +704,58 @@ fn element_loop(
     let densities = &state.densities;
     let laminate = &model.laminate;
     let thickness = laminate.reference_thickness();
-    results
-        .par_iter_mut()
-        .zip(state.laminate_states.par_iter_mut())
-        .zip(state.membrane.par_iter_mut())
+    let chunks: Vec<Result<(f64, f64), (usize, MaterialError)>> = results
+        .par_chunks_mut(CHUNK)
+        .zip(state.laminate_states.par_chunks_mut(CHUNK))
+        .zip(state.membrane.par_chunks_mut(CHUNK))
         .enumerate()
-        .map(|(k, ((result, lam_state), membrane))| {
-            let e = &model.elements[k];
-            let f = e.gradient(positions);
-            let f_dot = e.gradient(velocities);
-            let kin = MembraneKinematics::from_deformation(&f, &f_dot, model.temperature, e.fibres);
-            let response = laminate
-                .membrane_response(&kin, dt, lam_state)
-                .map_err(|err| (k, err))?;
-            let StepModuli {
-                wave: modulus,
-                viscous: viscosity,
-            } = laminate
-                .step_moduli(&kin, lam_state)
-                .map_err(|err| (k, err))?;
-            *membrane = response;
-            let element_step = e.altitude * (densities[k] / modulus).sqrt();
-            let (n_damping, power) =
-                yarn_damping_resultant(&kin, xi, element_step, modulus, thickness);
-            result.forces = e.internal_forces(&f, &(response.n + n_damping));
-            let xi_total = xi + material_damping_ratio(viscosity, modulus, element_step);
-            result.stable_step = element_step * step_reduction(xi_total);
-            result.damping_power = power * e.area;
-            Ok((result.stable_step, result.damping_power))
+        .map(|(c, ((results, lam_states), membranes))| {
+            let mut chunk = (f64::INFINITY, 0.0);
+            let items = results.iter_mut().zip(lam_states).zip(membranes);
+            for (i, ((result, lam_state), membrane)) in items.enumerate() {
+                let k = c * CHUNK + i;
+                let e = &model.elements[k];
+                let f = e.gradient(positions);
+                let f_dot = e.gradient(velocities);
+                let kin =
+                    MembraneKinematics::from_deformation(&f, &f_dot, model.temperature, e.fibres);
+                let response = laminate
+                    .membrane_response(&kin, dt, lam_state)
+                    .map_err(|err| (k, err))?;
+                let StepModuli {
+                    wave: modulus,
+                    viscous: viscosity,
+                } = laminate
+                    .step_moduli(&kin, lam_state)
+                    .map_err(|err| (k, err))?;
+                *membrane = response;
+                let element_step = e.altitude * (densities[k] / modulus).sqrt();
+                let (n_damping, power) =
+                    yarn_damping_resultant(&kin, xi, element_step, modulus, thickness);
+                result.forces = e.internal_forces(&f, &(response.n + n_damping));
+                let xi_total = xi + material_damping_ratio(viscosity, modulus, element_step);
+                result.stable_step = element_step * step_reduction(xi_total);
+                result.damping_power = power * e.area;
+                chunk = (
+                    chunk.0.min(result.stable_step),
+                    chunk.1 + result.damping_power,
+                );
+            }
+            Ok(chunk)
         })
-        .try_reduce(
-            || (f64::INFINITY, 0.0),
-            |a, b| Ok((a.0.min(b.0), a.1 + b.1)),
-        )
+        .collect();
+    chunks
+        .into_iter()
+        .try_fold((f64::INFINITY, 0.0), |(step, power), chunk| {
+            let (chunk_step, chunk_power) = chunk?;
+            Ok((step.min(chunk_step), power + chunk_power))
+        })
 }
+
+/// Elements per chunk of the parallel sums: fixed, so that where the partial sums start does
+/// not depend on the thread count (results bit for bit the same on any number of threads),
+/// and large enough that the per-chunk bookkeeping costs nothing against the element work.
+const CHUNK: usize = 256;
 
 /// Fraction of critical damping that a material viscosity `eta` (MPa·s) gives the highest mode
 /// of an element, `omega = 2 / dt_e`: `xi = eta omega / (2 E) = eta / (E dt_e)`. Heavily
