@@ -1,8 +1,10 @@
 //! The `thermostamp` command line.
 //!
 //! Exit codes: 0 success; 1 a simulation that went unstable (the results so far are kept);
-//! 2 bad input (usage, files, values, or a history the material cannot follow). Errors are
-//! one line on standard error.
+//! 2 bad input (usage, files, values, or a history the material cannot follow), an output
+//! folder held by another run, or a result that could not be written (full disk, a folder
+//! that cannot be created); 130 interrupted by Ctrl-C or SIGTERM (the results so far are
+//! kept). Errors are one line on standard error.
 
 mod drape;
 mod fit;
@@ -64,13 +66,29 @@ pub fn main() -> i32 {
     match result {
         Ok(()) => 0,
         Err(e) => {
-            eprintln!("error: {}", one_line(&format!("{e:#}")));
-            if e.downcast_ref::<SolverError>().is_some() {
-                1
+            let code = exit_code(&e);
+            let message = one_line(&format!("{e:#}"));
+            if code == EXIT_INTERRUPTED {
+                eprintln!("{message}, results so far kept");
             } else {
-                2
+                eprintln!("error: {message}");
             }
+            code
         }
+    }
+}
+
+/// Exit code of a run stopped by Ctrl-C or SIGTERM (128 + SIGINT, as shells report it).
+pub const EXIT_INTERRUPTED: i32 = 130;
+
+/// 1 for a run that went unstable, 130 for one interrupted, 2 for everything else: bad
+/// input, and results that could not be written.
+fn exit_code(e: &anyhow::Error) -> i32 {
+    match e.downcast_ref::<SolverError>() {
+        Some(SolverError::Interrupted { .. }) => EXIT_INTERRUPTED,
+        Some(SolverError::Output { .. }) => 2,
+        Some(_) => 1,
+        None => 2,
     }
 }
 

@@ -5,7 +5,7 @@
 use super::kinematics::{bias_extension_normalised_shear_force, bias_extension_shear_angle};
 use super::sheet_test::{
     clamped_strip, clamped_strip_measurement, validate_strip, Measurement, SheetTest, SheetTestRun,
-    TestProcess, TestRun,
+    Record, TestProcess,
 };
 use crate::material::Laminate;
 use crate::mesh::DiagonalPattern;
@@ -141,12 +141,12 @@ impl SheetTest for BiasExtension {
         clamped_strip_measurement(model, &self.process, self.central_zone(model))
     }
 
-    fn rows(&self, run: &TestRun) -> Vec<BiasRow> {
-        let d: Vec<f64> = run.records.iter().map(|r| r.reading.displacement).collect();
-        let f: Vec<f64> = run.records.iter().map(|r| r.reading.force).collect();
+    fn rows(&self, records: &[Record]) -> Vec<BiasRow> {
+        let d: Vec<f64> = records.iter().map(|r| r.reading.displacement).collect();
+        let f: Vec<f64> = records.iter().map(|r| r.reading.force).collect();
         let mut f_sh =
             bias_extension_normalised_shear_force(self.width, self.length, &d, &f).into_iter();
-        run.records
+        records
             .iter()
             .map(|r| {
                 let d = r.reading.displacement;

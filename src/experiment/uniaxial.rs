@@ -11,7 +11,7 @@
 
 use super::sheet_test::{
     clamped_strip, clamped_strip_measurement, validate_strip, Measurement, SheetTest, SheetTestRun,
-    TestProcess, TestRun,
+    Record, TestProcess,
 };
 use crate::material::Laminate;
 use crate::mesh::DiagonalPattern;
@@ -131,8 +131,8 @@ impl SheetTest for UniaxialTension {
         clamped_strip_measurement(model, &self.process, self.gauge_section(model))
     }
 
-    fn rows(&self, run: &TestRun) -> Vec<UniaxialRow> {
-        run.records
+    fn rows(&self, records: &[Record]) -> Vec<UniaxialRow> {
+        records
             .iter()
             .map(|r| UniaxialRow {
                 time: r.time,

@@ -413,10 +413,14 @@ fn write_atomically(path: &Path, text: &str) -> Result<(), VtkError> {
     let mut tmp = path.as_os_str().to_owned();
     tmp.push(".tmp");
     let tmp = PathBuf::from(tmp);
-    std::fs::write(&tmp, text).map_err(|source| VtkError::Io {
-        path: tmp.clone(),
-        action: "write the file",
-        source,
+    std::fs::write(&tmp, text).map_err(|source| {
+        // a disk that filled up mid-write leaves a partial temporary file: not ours to leave
+        let _ = std::fs::remove_file(&tmp);
+        VtkError::Io {
+            path: path.to_path_buf(),
+            action: "write the file",
+            source,
+        }
     })?;
     std::fs::rename(&tmp, path).map_err(|source| {
         let _ = std::fs::remove_file(&tmp);
