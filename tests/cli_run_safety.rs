@@ -171,7 +171,11 @@ fn interrupted_forming_run_keeps_whole_rows_and_frames() {
         (frames.last().unwrap().0 - last_time).abs() <= 1e-9 * last_time,
         "last frame {frames:?} is not the last row's time {last_time}"
     );
-    assert!(temporary_files(&dir).is_empty(), "{:?}", temporary_files(&dir));
+    assert!(
+        temporary_files(&dir).is_empty(),
+        "{:?}",
+        temporary_files(&dir)
+    );
 }
 
 /// SIGKILL mid-run: the rows so far parse; the next run into the folder takes it over (the
@@ -203,9 +207,16 @@ fn killed_forming_run_keeps_whole_rows_and_the_next_run_clears_its_frames() {
     let frames = pvd_frames(&dir.join("forming.pvd"));
     assert_eq!(frames.len(), 3, "{frames:?}");
     assert!(!dir.join("forming_0003.vtu").exists(), "a dead run's frame");
-    assert_eq!(std::fs::read_to_string(dir.join("notes.txt")).unwrap(), "mine");
+    assert_eq!(
+        std::fs::read_to_string(dir.join("notes.txt")).unwrap(),
+        "mine"
+    );
     assert_eq!(parsed_rows(&dir.join("forming.csv")).len(), 5);
-    assert!(temporary_files(&dir).is_empty(), "{:?}", temporary_files(&dir));
+    assert!(
+        temporary_files(&dir).is_empty(),
+        "{:?}",
+        temporary_files(&dir)
+    );
 }
 
 /// A second run into a folder that a run is writing is refused, naming the first; the first
@@ -219,8 +230,10 @@ fn second_run_into_a_busy_folder_is_refused_naming_the_first() {
     let stderr = String::from_utf8_lossy(&second.stderr);
     assert_eq!(second.status.code(), Some(2), "{stderr}");
     assert!(
-        stderr.contains(&format!("is being written by another run (pid {},", first.id()))
-            && stderr.contains("choose another --output"),
+        stderr.contains(&format!(
+            "is being written by another run (pid {},",
+            first.id()
+        )) && stderr.contains("choose another --output"),
         "{stderr}"
     );
     assert!(first.try_wait().unwrap().is_none(), "the first run stopped");
@@ -276,7 +289,9 @@ fn interrupted_bias_extension_keeps_whole_rows() {
     let rows = parsed_rows(&csv);
     assert!(rows.len() >= 10, "{} rows", rows.len());
     // the displacement grows row after row, and the pin-jointed angle with it
-    assert!(rows.windows(2).all(|w| w[1][1] > w[0][1] && w[1][4] >= w[0][4]));
+    assert!(rows
+        .windows(2)
+        .all(|w| w[1][1] > w[0][1] && w[1][4] >= w[0][4]));
     let frames = pvd_frames(&dir.join("bias-extension.pvd"));
     assert!(!frames.is_empty());
     assert!(dir.join("bias-extension-force.png").exists());
@@ -293,7 +308,10 @@ fn output_under_a_regular_file_is_refused_naming_it() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{stderr}");
     assert!(
-        stderr.contains(&format!("{}: cannot create the output folder", file.join("sub").display())),
+        stderr.contains(&format!(
+            "{}: cannot create the output folder",
+            file.join("sub").display()
+        )),
         "{stderr}"
     );
     assert_eq!(stderr.lines().count(), 1, "{stderr}");
@@ -324,7 +342,11 @@ fn full_disk_stops_the_run_with_exit_2_naming_the_file() {
         stderr.contains("forming_0001.vtu: cannot write the file: No space left on device"),
         "{stderr}"
     );
-    assert!(temporary_files(&dir).is_empty(), "{:?}", temporary_files(&dir));
+    assert!(
+        temporary_files(&dir).is_empty(),
+        "{:?}",
+        temporary_files(&dir)
+    );
     assert!(!dir.join("forming_0001.vtu").exists());
     // the rows before the failed frame are kept
     assert!(!parsed_rows(&dir.join("forming.csv")).is_empty());

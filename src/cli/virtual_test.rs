@@ -253,7 +253,9 @@ fn newest_row<T: SheetTest>(
     records: &[Record],
 ) -> Option<Vec<f64>> {
     let rows = test.rows(records);
-    let own = *report(rows.get(rows.len().checked_sub(1)?..)?).rows.first()?;
+    let own = *report(rows.get(rows.len().checked_sub(1)?..)?)
+        .rows
+        .first()?;
     Some(history_row(records.last()?, &own))
 }
 

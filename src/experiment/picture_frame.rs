@@ -23,7 +23,7 @@
 
 use super::kinematics::{picture_frame_angles, picture_frame_normalised_force};
 use super::sheet_test::{
-    mean_shear_angle, positive, Measurement, Reading, SheetTest, Record, SheetTestRun, TestProcess,
+    mean_shear_angle, positive, Measurement, Reading, Record, SheetTest, SheetTestRun, TestProcess,
 };
 use crate::material::Laminate;
 use crate::mesh::{rectangle, DiagonalPattern, Mesh};

@@ -10,8 +10,8 @@
 //! between the clamps like a bias-extension specimen and are far softer.
 
 use super::sheet_test::{
-    clamped_strip, clamped_strip_measurement, validate_strip, Measurement, SheetTest, SheetTestRun,
-    Record, TestProcess,
+    clamped_strip, clamped_strip_measurement, validate_strip, Measurement, Record, SheetTest,
+    SheetTestRun, TestProcess,
 };
 use crate::material::Laminate;
 use crate::mesh::DiagonalPattern;

@@ -290,7 +290,8 @@ mod tests {
 
     #[test]
     fn streamed_rows_are_on_disk_after_each_call() {
-        let dir = std::env::temp_dir().join(format!("thermostamp-csv-stream-{}", std::process::id()));
+        let dir =
+            std::env::temp_dir().join(format!("thermostamp-csv-stream-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let path = dir.join("h.csv");
         let mut csv = CsvStream::create(&path, &["x", "y"]).unwrap();
