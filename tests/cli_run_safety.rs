@@ -247,7 +247,17 @@ fn second_run_into_a_busy_folder_is_refused_naming_the_first() {
 /// test's own columns, computed as the run goes, included), the frames are listed.
 #[test]
 fn interrupted_bias_extension_keeps_whole_rows() {
-    let dir = out_dir("safety-bias");
+    bias_extension_stopped_by("INT", "safety-bias-sigint");
+}
+
+/// SIGTERM (what a batch system sends) stops it the same way.
+#[test]
+fn terminated_bias_extension_keeps_whole_rows() {
+    bias_extension_stopped_by("TERM", "safety-bias-sigterm");
+}
+
+fn bias_extension_stopped_by(signal_name: &str, folder: &str) {
+    let dir = out_dir(folder);
     let args = [
         "test",
         "bias-extension",
@@ -276,7 +286,7 @@ fn interrupted_bias_extension_keeps_whole_rows() {
     let mut child = spawn(&args);
     let csv = dir.join("bias-extension.csv");
     wait_for_rows(&mut child, &csv, 10);
-    signal(&child, "INT");
+    signal(&child, signal_name);
     let out = child.wait_with_output().unwrap();
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert_eq!(

@@ -63,18 +63,11 @@ pub enum FolderError {
     },
 }
 
-/// The lock on an output folder, held until dropped (or the process ends).
+/// The lock on an output folder, held until dropped (or the process ends): the lock file
+/// held open, since closing it would release the lock.
 #[derive(Debug)]
 pub struct FolderLock {
-    folder: PathBuf,
-    // held open: closing it would release the lock
     _file: File,
-}
-
-impl FolderLock {
-    pub fn folder(&self) -> &Path {
-        &self.folder
-    }
 }
 
 /// Creates `folder` if missing, locks it for this run (`command` is the command line the lock
@@ -132,10 +125,7 @@ pub fn take_folder(
         .and_then(|()| file.write_all(line.as_bytes()))
         .map_err(io(&lock_path, "write the lock file"))?;
     clear_products(folder, products)?;
-    Ok(FolderLock {
-        folder: folder.to_path_buf(),
-        _file: file,
-    })
+    Ok(FolderLock { _file: file })
 }
 
 /// The holder as its lock file names it; a holder that has not written its line yet is still
