@@ -12,7 +12,8 @@
 //! short writer and a base64 encoder.
 //!
 //! Every file is written to `NAME.tmp` and renamed, so a run that stops mid-write leaves
-//! either the old file or the new one, never half of one.
+//! either the old file or the new one, never half of one; a write that fails (a full disk)
+//! removes its temporary file.
 
 use std::fmt::{self, Display, Write as _};
 use std::path::{Path, PathBuf};
