@@ -1,15 +1,18 @@
 //! `thermostamp run scenario.toml`: a thermo-stamping run with CSV history, ParaView frames, a
 //! punch-force plot, a progress bar and a summary table.
 
-use super::shared::{print_table, with_threads, Bar, ScenarioArgs};
-use crate::experiment::sheet_test::FrameOutput;
-use crate::forming::export::write_formed_blank;
+use super::shared::{
+    interrupt_flag, print_table, status_row, take_output_folder, with_threads, Bar, ScenarioArgs,
+    Watch,
+};
+use crate::experiment::sheet_test::{FrameOutput, HistorySink, LiveOutput};
+use crate::forming::export::{write_formed_blank, FORMED_INP, FORMED_VTU};
 use crate::forming::run::shear_angles;
 use crate::forming::{run::FormingRun, FormingModel, FormingRecord, Scenario};
+use crate::io::output_folder::ProductFiles;
 use crate::io::plot::{write_map_png, write_png, LinePlot, LineStyle, MapPlot, Series};
 use crate::io::vtk::PvdSeries;
-use crate::io::write_csv;
-use anyhow::Context;
+use crate::io::CsvStream;
 use std::path::{Path, PathBuf};
 
 #[derive(clap::Args, Debug)]
@@ -32,22 +35,30 @@ fn forming(args: &Args) -> anyhow::Result<()> {
     for note in &forming.notes {
         eprintln!("note: {note}");
     }
-    std::fs::create_dir_all(&dir)
-        .with_context(|| format!("cannot create the output folder {}", dir.display()))?;
-    let frames = match scenario.output.frames {
-        0 => None,
-        n => Some(FrameOutput {
-            series: PvdSeries::new(&dir, "forming")?,
-            every: (scenario.output.history_points / n).max(1),
-        }),
+    let _lock = take_output_folder(&dir, &products())?;
+    let csv = dir.join(CSV);
+    let output = LiveOutput {
+        history: Some(history(CsvStream::create(&csv, &COLUMNS)?)),
+        frames: match scenario.output.frames {
+            0 => None,
+            n => Some(FrameOutput {
+                series: PvdSeries::new(&dir, SERIES)?,
+                every: (scenario.output.history_points / n).max(1),
+            }),
+        },
     };
+    let stop = interrupt_flag()?;
     let mut bar = Bar::new(forming.settings.end_time);
-    let result = crate::forming::run::run(&forming, frames, Some(&mut bar));
+    let mut watch = Watch {
+        bar: &mut bar,
+        stop: &stop,
+    };
+    let result = crate::forming::run::run(&forming, Some(output), Some(&mut watch));
     bar.finish();
     if result.records.is_empty() {
         return result.outcome.map(|_| ()).map_err(anyhow::Error::from);
     }
-    let mut files = write_outputs(&dir, &result.records)?;
+    let mut files = vec![csv, write_force_plot(&dir, &result.records)?];
     if let Ok(state) = &result.outcome {
         files.push(write_shear_map(
             &dir,
@@ -58,7 +69,7 @@ fn forming(args: &Args) -> anyhow::Result<()> {
         files.extend(write_formed_blank(&dir, &forming.model, state)?);
     }
     if scenario.output.frames > 0 {
-        files.push(dir.join("forming.pvd"));
+        files.push(dir.join(format!("{SERIES}.pvd")));
     }
     print_summary(&scenario, &forming, &result, &files);
     result.outcome.map(|_| ()).map_err(anyhow::Error::from)
@@ -109,18 +120,34 @@ fn row(r: &FormingRecord) -> [f64; 18] {
     ]
 }
 
-/// `forming.csv` and `forming-punch-force.png`.
-fn write_outputs(dir: &Path, records: &[FormingRecord]) -> anyhow::Result<Vec<PathBuf>> {
-    let csv = dir.join("forming.csv");
-    let file =
-        std::fs::File::create(&csv).with_context(|| format!("cannot create {}", csv.display()))?;
-    write_csv(
-        &mut std::io::BufWriter::new(file),
-        &COLUMNS,
-        records.iter().map(row),
-    )
-    .with_context(|| format!("cannot write {}", csv.display()))?;
-    let png = dir.join("forming-punch-force.png");
+/// The files a run writes, by which a later run into the folder finds and clears them.
+const CSV: &str = "forming.csv";
+const FORCE_PLOT: &str = "forming-punch-force.png";
+const SHEAR_MAP: &str = "forming-shear-map.png";
+const SERIES: &str = "forming";
+
+fn products() -> ProductFiles {
+    ProductFiles {
+        names: [CSV, FORCE_PLOT, SHEAR_MAP, FORMED_INP, FORMED_VTU]
+            .map(String::from)
+            .to_vec(),
+        series: Some(SERIES.into()),
+    }
+}
+
+/// The CSV history, a row written as each record is taken.
+fn history<'a>(mut csv: CsvStream) -> HistorySink<'a, FormingRecord> {
+    Box::new(move |records: &[FormingRecord]| {
+        if let Some(newest) = records.last() {
+            csv.write_row(&row(newest))?;
+        }
+        Ok(())
+    })
+}
+
+/// `forming-punch-force.png`.
+fn write_force_plot(dir: &Path, records: &[FormingRecord]) -> anyhow::Result<PathBuf> {
+    let png = dir.join(FORCE_PLOT);
     let plot = LinePlot {
         title: "Forming: punch force".into(),
         x_label: "punch stroke (mm)".into(),
@@ -132,7 +159,7 @@ fn write_outputs(dir: &Path, records: &[FormingRecord]) -> anyhow::Result<Vec<Pa
         )],
     };
     write_png(&png, &plot, 900, 600)?;
-    Ok(vec![csv, png])
+    Ok(png)
 }
 
 /// Fraction of the final internal work from which the kinetic energy is compared with it.
@@ -165,7 +192,7 @@ fn write_shear_map(
             .collect(),
         limit: locking_angle,
     };
-    let path = dir.join("forming-shear-map.png");
+    let path = dir.join(SHEAR_MAP);
     write_map_png(&path, &map, 900, 700)?;
     Ok(path)
 }
@@ -201,6 +228,7 @@ fn print_summary(
         .fold(0.0, f64::max);
     let elements = forming.model.elements.len();
     let rows = [
+        status_row(&result.outcome),
         ("scenario", scenario.origin.clone()),
         (
             "blank",

@@ -2,7 +2,9 @@
 //!
 //! Exit codes: 0 success; 1 a run that failed, diagnosed (the results so far are kept);
 //! 2 bad input of any kind (usage, files, values, settings, or a history the material cannot
-//! follow). Errors are one line on standard error.
+//! follow), an output folder held by another run, or a result that could not be written (full
+//! disk, a folder that cannot be created); 130 interrupted by Ctrl-C or SIGTERM (the results so
+//! far are kept). Errors are one line on standard error.
 
 mod drape;
 mod fit;
@@ -65,17 +67,28 @@ pub fn main() -> i32 {
     match result {
         Ok(()) => 0,
         Err(e) => {
-            eprintln!("error: {}", tidy_message(&format!("{e:#}")));
-            exit_code(&e)
+            let code = exit_code(&e);
+            let message = tidy_message(&format!("{e:#}"));
+            if code == EXIT_INTERRUPTED {
+                eprintln!("{message}, results so far kept");
+            } else {
+                eprintln!("error: {message}");
+            }
+            code
         }
     }
 }
 
-/// 1 for a run that the solver stopped (a diagnosed failure, results so far kept), 2 for
-/// everything else: bad input, found before the first step wherever it can be.
+/// Exit code of a run stopped by Ctrl-C or SIGTERM (128 + SIGINT, as shells report it).
+pub const EXIT_INTERRUPTED: i32 = 130;
+
+/// 1 for a run that the solver stopped (a diagnosed failure, results so far kept), 130 for one
+/// interrupted, 2 for everything else: bad input (found before the first step wherever it can
+/// be), and results that could not be written.
 fn exit_code(e: &anyhow::Error) -> i32 {
     match e.downcast_ref::<SolverError>() {
-        Some(SolverError::Settings(_)) | None => 2,
+        Some(SolverError::Interrupted { .. }) => EXIT_INTERRUPTED,
+        Some(SolverError::Output { .. } | SolverError::Settings(_)) | None => 2,
         Some(_) => 1,
     }
 }

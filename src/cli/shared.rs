@@ -1,10 +1,15 @@
-//! What the long-running commands share: the worker-thread pool and the progress bar.
+//! What the long-running commands share: the worker-thread pool, the progress bar, Ctrl-C,
+//! the lock on the output folder and the summary table.
 
 use crate::experiment::sheet_test::Progress;
 use crate::forming::Scenario;
+use crate::io::output_folder::{take_folder, FolderLock, ProductFiles};
+use crate::solver::{SolverError, State};
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 
 /// Where `thermostamp run --help` and `drape --help` send the reader for the scenario keys.
 pub const SCENARIO_REFERENCE: &str =
@@ -77,6 +82,62 @@ impl Progress for Bar {
         self.bar
             .set_message(format!("step {step}, t = {time:.4e} s"));
     }
+}
+
+/// A flag that Ctrl-C (SIGINT) and SIGTERM raise: the run then finishes its step, records it
+/// and stops. A second signal, while the first is being honoured, ends the process at once
+/// with the interrupted exit code (130).
+pub fn interrupt_flag() -> anyhow::Result<Arc<AtomicBool>> {
+    let flag = Arc::new(AtomicBool::new(false));
+    let raised = Arc::clone(&flag);
+    ctrlc::set_handler(move || {
+        if raised.swap(true, Ordering::SeqCst) {
+            std::process::exit(super::EXIT_INTERRUPTED);
+        }
+    })
+    .context("cannot install the Ctrl-C handler")?;
+    Ok(flag)
+}
+
+/// The progress bar of a run and the flag that stops it.
+pub struct Watch<'a> {
+    pub bar: &'a mut Bar,
+    pub stop: &'a AtomicBool,
+}
+
+impl Progress for Watch<'_> {
+    fn update(&mut self, time: f64, step: usize) {
+        self.bar.update(time, step);
+    }
+
+    fn interrupted(&self) -> bool {
+        self.stop.load(Ordering::Relaxed)
+    }
+}
+
+/// Locks `dir` for this run and clears an earlier run's `products` there (see
+/// [`take_folder`]); the lock file records this process's command line.
+pub fn take_output_folder(dir: &Path, products: &ProductFiles) -> anyhow::Result<FolderLock> {
+    let command: Vec<String> = std::env::args().collect();
+    Ok(take_folder(dir, &command.join(" "), products)?)
+}
+
+/// The summary's line on how the run ended.
+pub fn status_row(outcome: &Result<State, SolverError>) -> (&'static str, String) {
+    let status = match outcome {
+        Ok(_) => "finished".to_string(),
+        Err(SolverError::Interrupted { step, time }) => {
+            format!("interrupted at step {step}, t = {time:.4e} s, results so far kept")
+        }
+        Err(SolverError::Unstable { step, time, .. }) => {
+            format!("unstable at step {step}, t = {time:.4e} s, results so far kept")
+        }
+        Err(SolverError::Output { time, .. }) => {
+            format!("stopped at t = {time:.4e} s: a result could not be written")
+        }
+        Err(SolverError::Settings(_)) => "not started: bad solver settings".to_string(),
+    };
+    ("status", status)
 }
 
 /// The summary table of a run, `(name, value)` per row, then the files written.

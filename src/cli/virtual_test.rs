@@ -1,20 +1,22 @@
 //! `thermostamp test ...`: the virtual material tests, with CSV, ParaView and PNG output, a
 //! progress bar and a summary table.
 
-use super::shared::{print_table, with_threads, Bar};
+use super::shared::{
+    interrupt_flag, print_table, status_row, take_output_folder, with_threads, Bar, Watch,
+};
 use crate::experiment::bias_extension::{BiasExtension, BiasRow};
 use crate::experiment::picture_frame::{PictureFrame, PictureFrameRow};
 use crate::experiment::sheet_test::{
-    FrameOutput, Progress, Record, RunSummary, SheetTest, TestProcess, TestRun,
-    QUASI_STATIC_SPEED_RATIO,
+    FrameOutput, HistorySink, LiveOutput, Progress, Record, RunSummary, SheetTest, TestProcess,
+    TestRun, QUASI_STATIC_SPEED_RATIO,
 };
 use crate::experiment::uniaxial::{UniaxialRow, UniaxialTension};
+use crate::io::output_folder::ProductFiles;
 use crate::io::plot::{write_png, LinePlot, LineStyle, Series};
 use crate::io::vtk::PvdSeries;
-use crate::io::write_csv;
+use crate::io::CsvStream;
 use crate::material::MaterialCard;
 use crate::mesh::DiagonalPattern;
-use anyhow::Context;
 use std::path::{Path, PathBuf};
 
 #[derive(clap::Subcommand, Debug)]
@@ -284,10 +286,43 @@ fn sheet_test<T: SheetTest>(
     warn_if_dynamic(test, card).map_err(|e| anyhow::anyhow!("{}: {e}", names.0))?;
     let p = test.process();
     let shape = (test.settings().end_time, p.time_scaling);
-    run_and_report(c, names, shape, p.history_points, |frames, bar| {
-        let result = test.run(&card.laminate, card.density, frames, Some(bar))?;
+    let history = |mut csv: CsvStream| -> HistorySink<'_, Record> {
+        Box::new(move |records: &[Record]| {
+            if let Some(row) = newest_row(test, report, records) {
+                csv.write_row(&row)?;
+            }
+            Ok(())
+        })
+    };
+    let columns = report(&[]).columns;
+    run_and_report(c, names, shape, p.history_points, columns, |output, bar| {
+        let output = LiveOutput {
+            history: output.csv.map(history),
+            frames: output.frames,
+        };
+        let result = test.run(&card.laminate, card.density, Some(output), Some(bar))?;
         Ok((result.run, report(&result.rows)))
     })
+}
+
+/// The CSV row of the newest of `records`: its test's rows are computed from the records so
+/// far (a row depends on the records up to its own only).
+fn newest_row<T: SheetTest>(
+    test: &T,
+    report: fn(&[T::Row]) -> TestReport,
+    records: &[Record],
+) -> Option<Vec<f64>> {
+    let rows = test.rows(records);
+    let own = *report(rows.get(rows.len().checked_sub(1)?..)?)
+        .rows
+        .first()?;
+    Some(history_row(records.last()?, &own))
+}
+
+/// What [`run_and_report`] opens before the run, for the test to write as it goes.
+struct OpenOutput {
+    csv: Option<CsvStream>,
+    frames: Option<FrameOutput>,
 }
 
 /// A warning on standard error when the crosshead is too fast for a quasi-static test.
@@ -305,34 +340,65 @@ fn warn_if_dynamic<T: SheetTest>(test: &T, card: &MaterialCard) -> Result<(), St
     Ok(())
 }
 
-/// Runs a virtual test with the shared outputs: ParaView frames and a progress bar while it
-/// runs, then the CSV history, the plots and the summary table. `(label, name)`: the test in
-/// messages and the stem of its files; `(end_time, time_scaling)` of the run. `run` returns
-/// the test's run and its report; a run that went unstable keeps what it wrote and returns
-/// its solver error.
+/// Runs a virtual test with the shared outputs: the CSV history (`columns` are the test's
+/// own), ParaView frames and a progress bar while it runs, then the plots and the summary
+/// table. `(label, name)`: the test in messages and the stem of its files; `(end_time,
+/// time_scaling)` of the run. `run` returns the test's run and its report; a run that went
+/// unstable or was interrupted keeps what it wrote and returns its solver error.
 fn run_and_report(
     c: &CommonArgs,
     (label, name): (&str, &str),
     (end_time, time_scaling): (f64, f64),
     history_points: usize,
-    run: impl FnOnce(Option<FrameOutput>, &mut dyn Progress) -> Result<(TestRun, TestReport), String>,
+    columns: [&str; 3],
+    run: impl FnOnce(OpenOutput, &mut dyn Progress) -> Result<(TestRun, TestReport), String>,
 ) -> anyhow::Result<()> {
-    let frames = frame_output(&c.output, name, c.frames, history_points)?;
-    let wrote_frames = frames.is_some();
+    let _lock = take_output_folder(&c.output, &products(name))?;
+    let csv = c.output.join(format!("{name}.csv"));
+    let header: Vec<&str> = ["time", "displacement", "force"]
+        .into_iter()
+        .chain(columns)
+        .chain(ENERGY_COLUMNS)
+        .collect();
+    let output = OpenOutput {
+        csv: Some(CsvStream::create(&csv, &header)?),
+        frames: frame_output(&c.output, name, c.frames, history_points)?,
+    };
+    let wrote_frames = output.frames.is_some();
+    let stop = interrupt_flag()?;
     let mut bar = Bar::new(end_time);
-    let (run, report) = run(frames, &mut bar).map_err(|e| anyhow::anyhow!("{label}: {e}"))?;
+    let mut watch = Watch {
+        bar: &mut bar,
+        stop: &stop,
+    };
+    let (run, report) = run(output, &mut watch).map_err(|e| anyhow::anyhow!("{label}: {e}"))?;
     bar.finish();
     if run.records.is_empty() {
         // stopped before its first record: nothing to write
         return run.outcome.map(|_| ()).map_err(anyhow::Error::from);
     }
-    let mut files = write_outputs(&c.output, name, &report, &run.records)?;
+    let mut files = vec![csv];
+    files.extend(write_plots(&c.output, name, &report, &run.records)?);
     if wrote_frames {
         files.push(c.output.join(format!("{name}.pvd")));
     }
-    print_summary(&run.summary, time_scaling, &files);
+    print_summary(&run.summary, &run.outcome, time_scaling, &files);
     run.outcome.map(|_| ()).map_err(anyhow::Error::from)
 }
+
+/// The files a test named `name` writes, by which a later run into the folder finds and
+/// clears them.
+fn products(name: &str) -> ProductFiles {
+    let csv = format!("{name}.csv");
+    let plots = PLOT_SUFFIXES.map(|suffix| format!("{name}-{suffix}.png"));
+    ProductFiles {
+        names: std::iter::once(csv).chain(plots).collect(),
+        series: Some(name.into()),
+    }
+}
+
+/// The plots of the tests: `<name>-<suffix>.png`.
+const PLOT_SUFFIXES: [&str; 2] = ["force", "shear-angle"];
 
 fn frame_output(
     dir: &Path,
@@ -340,8 +406,6 @@ fn frame_output(
     frames: usize,
     records: usize,
 ) -> anyhow::Result<Option<FrameOutput>> {
-    std::fs::create_dir_all(dir)
-        .with_context(|| format!("cannot create the output folder {}", dir.display()))?;
     if frames == 0 {
         return Ok(None);
     }
@@ -393,30 +457,15 @@ fn history_row(record: &Record, own: &[f64; 3]) -> Vec<f64> {
         .collect()
 }
 
-/// `<name>.csv`, `<name>-force.png` and `<name>-<suffix>.png` per further plot; returns the
-/// files written.
-fn write_outputs(
+/// `<name>-force.png` and `<name>-<suffix>.png` per further plot; returns the files written.
+fn write_plots(
     dir: &Path,
     name: &str,
     report: &TestReport,
     records: &[Record],
 ) -> anyhow::Result<Vec<PathBuf>> {
-    let csv = dir.join(format!("{name}.csv"));
-    let header: Vec<&str> = ["time", "displacement", "force"]
-        .into_iter()
-        .chain(report.columns)
-        .chain(ENERGY_COLUMNS)
-        .collect();
-    let rows = records
-        .iter()
-        .zip(&report.rows)
-        .map(|(record, own)| history_row(record, own));
-    let file =
-        std::fs::File::create(&csv).with_context(|| format!("cannot create {}", csv.display()))?;
-    write_csv(&mut std::io::BufWriter::new(file), &header, rows)
-        .with_context(|| format!("cannot write {}", csv.display()))?;
-    let mut files = vec![csv];
-    let force = ("force", force_plot(report.title, records));
+    let mut files = Vec::new();
+    let force = (PLOT_SUFFIXES[0], force_plot(report.title, records));
     for (suffix, plot) in std::iter::once(&force).chain(&report.plots) {
         let png = dir.join(format!("{name}-{suffix}.png"));
         write_png(&png, plot, 900, 600)?;
@@ -492,7 +541,7 @@ fn shear_test_report<R>(
             "normalised_shear_force",
         ],
         rows: rows.into_iter().map(|(_, v)| v).collect(),
-        plots: vec![("shear-angle", plot)],
+        plots: vec![(PLOT_SUFFIXES[1], plot)],
     }
 }
 
@@ -526,8 +575,14 @@ fn uniaxial_report(rows: &[UniaxialRow]) -> TestReport {
     }
 }
 
-fn print_summary(s: &RunSummary, time_scaling: f64, files: &[PathBuf]) {
+fn print_summary(
+    s: &RunSummary,
+    outcome: &Result<crate::solver::State, crate::solver::SolverError>,
+    time_scaling: f64,
+    files: &[PathBuf],
+) {
     let rows = [
+        status_row(outcome),
         ("steps", format!("{}", s.steps)),
         ("elements", format!("{}", s.elements)),
         (

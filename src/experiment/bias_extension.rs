@@ -7,8 +7,8 @@ use super::kinematics::{
     bias_extension_shear_angle,
 };
 use super::sheet_test::{
-    clamped_strip, clamped_strip_measurement, validate_strip, Measurement, SheetTest, SheetTestRun,
-    TestProcess, TestRun,
+    clamped_strip, clamped_strip_measurement, validate_strip, Measurement, Record, SheetTest,
+    SheetTestRun, TestProcess,
 };
 use crate::material::Laminate;
 use crate::mesh::DiagonalPattern;
@@ -145,12 +145,12 @@ impl SheetTest for BiasExtension {
         clamped_strip_measurement(model, &self.process, self.central_zone(model))
     }
 
-    fn rows(&self, run: &TestRun) -> Vec<BiasRow> {
-        let d: Vec<f64> = run.records.iter().map(|r| r.reading.displacement).collect();
-        let f: Vec<f64> = run.records.iter().map(|r| r.reading.force).collect();
+    fn rows(&self, records: &[Record]) -> Vec<BiasRow> {
+        let d: Vec<f64> = records.iter().map(|r| r.reading.displacement).collect();
+        let f: Vec<f64> = records.iter().map(|r| r.reading.force).collect();
         let mut f_sh =
             bias_extension_normalised_shear_force(self.width, self.length, &d, &f).into_iter();
-        run.records
+        records
             .iter()
             .map(|r| {
                 let d = r.reading.displacement;
@@ -173,5 +173,47 @@ impl SheetTest for BiasExtension {
                 }
             })
             .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::experiment::sheet_test::Reading;
+    use crate::solver::Energies;
+
+    /// The rows written while the run goes (from the records so far) are the rows of the
+    /// whole run: the normalised shear force of a record looks back only.
+    #[test]
+    fn rows_of_the_first_records_do_not_change_as_records_come() {
+        let test = BiasExtension::benchmark(300.0);
+        let records: Vec<Record> = (0..40)
+            .map(|i| {
+                let d = 1.5 * i as f64;
+                Record {
+                    time: 0.1 * i as f64,
+                    reading: Reading {
+                        displacement: d,
+                        force: 2.0 * d + 0.01 * d * d * d,
+                        shear_angle: 0.5 * d,
+                    },
+                    energies: Energies::default(),
+                }
+            })
+            .collect();
+        let all = test.rows(&records);
+        assert_eq!(all.len(), records.len());
+        for i in 1..=records.len() {
+            let newest = *test.rows(&records[..i]).last().unwrap();
+            let whole = all[i - 1];
+            assert_eq!(newest.time, whole.time);
+            assert!(
+                newest.normalised_shear_force == whole.normalised_shear_force
+                    || (newest.normalised_shear_force.is_nan()
+                        && whole.normalised_shear_force.is_nan()),
+                "record {i}: {newest:?} against {whole:?}"
+            );
+        }
+        assert!(all[39].normalised_shear_force > all[10].normalised_shear_force);
     }
 }

@@ -23,7 +23,7 @@
 
 use super::kinematics::{picture_frame_angles, picture_frame_normalised_force};
 use super::sheet_test::{
-    mean_shear_angle, positive, Measurement, Reading, SheetTest, SheetTestRun, TestProcess, TestRun,
+    mean_shear_angle, positive, Measurement, Reading, Record, SheetTest, SheetTestRun, TestProcess,
 };
 use crate::material::Laminate;
 use crate::mesh::{rectangle, DiagonalPattern, Mesh};
@@ -244,8 +244,8 @@ impl SheetTest for PictureFrame {
         }))
     }
 
-    fn rows(&self, run: &TestRun) -> Vec<PictureFrameRow> {
-        run.records
+    fn rows(&self, records: &[Record]) -> Vec<PictureFrameRow> {
+        records
             .iter()
             .map(|r| {
                 let d = r.reading.displacement;

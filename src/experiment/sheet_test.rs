@@ -176,8 +176,9 @@ pub trait SheetTest {
     /// Crosshead displacement, force and watched shear angle of `model` at a record.
     fn measurement(&self, model: &Model) -> Result<Measurement, String>;
 
-    /// The history rows of a run.
-    fn rows(&self, run: &TestRun) -> Vec<Self::Row>;
+    /// The history rows of the records of a run: row `i` depends on records `0..=i` only, so
+    /// the rows of the first records are the same while the run goes and at its end.
+    fn rows(&self, records: &[Record]) -> Vec<Self::Row>;
 
     fn settings(&self) -> SolverSettings {
         self.process().settings()
@@ -211,7 +212,7 @@ pub trait SheetTest {
         &self,
         laminate: &Laminate,
         density: f64,
-        frames: Option<FrameOutput>,
+        output: Option<LiveOutput<'_, Record>>,
         progress: Option<&mut dyn Progress>,
     ) -> Result<SheetTestRun<Self::Row>, String> {
         let model = self.model(laminate, density)?;
@@ -221,12 +222,12 @@ pub trait SheetTest {
             &model,
             &self.settings(),
             &measure,
-            frames,
+            output,
             progress,
             settle_time,
         );
         Ok(SheetTestRun {
-            rows: self.rows(&run),
+            rows: self.rows(&run.records),
             run,
         })
     }
@@ -292,39 +293,83 @@ pub struct FrameOutput {
 }
 
 impl FrameOutput {
-    /// Writes the frame of record number `index` (from 0) if it is one of every `every`.
-    pub fn at_record(&mut self, index: usize, model: &Model, state: &State) -> anyhow::Result<()> {
-        if index.is_multiple_of(self.every.max(1)) {
+    /// Writes the frame of record number `index` (from 0) if it is one of every `every`, or
+    /// if it is the `last` of a run that stops.
+    pub fn at_record(
+        &mut self,
+        index: usize,
+        last: bool,
+        model: &Model,
+        state: &State,
+    ) -> anyhow::Result<()> {
+        if last || index.is_multiple_of(self.every.max(1)) {
             write_frame(&mut self.series, model, state)?;
         }
         Ok(())
     }
 }
 
-/// Progress reports while the solver runs (a progress bar in the command line).
+/// Progress reports while the solver runs (a progress bar in the command line), and the
+/// user's wish to stop it.
 pub trait Progress {
     fn update(&mut self, time: f64, step: usize);
+    /// Whether the user asked the run to stop (Ctrl-C); asked once per step, so cheap.
+    fn interrupted(&self) -> bool {
+        false
+    }
 }
 
-struct Recorder<'m, 'p> {
+/// Called after each record with all the records so far (the command line writes the newest
+/// one's CSV row); an error stops the run.
+pub type HistorySink<'a, R> = Box<dyn FnMut(&[R]) -> anyhow::Result<()> + 'a>;
+
+/// What a run writes while it goes, so that a run stopped at any point keeps its results so
+/// far: the history, a row per record, and ParaView frames.
+pub struct LiveOutput<'a, R> {
+    pub history: Option<HistorySink<'a, R>>,
+    pub frames: Option<FrameOutput>,
+}
+
+impl<R> LiveOutput<'_, R> {
+    /// Hands the records so far to the history, and writes the frame of the newest if it is
+    /// due (always when it is the `last` of a stopped run).
+    pub fn at_record(
+        &mut self,
+        records: &[R],
+        last: bool,
+        model: &Model,
+        state: &State,
+    ) -> anyhow::Result<()> {
+        if let Some(history) = &mut self.history {
+            history(records)?;
+        }
+        if let Some(frames) = &mut self.frames {
+            frames.at_record(records.len().saturating_sub(1), last, model, state)?;
+        }
+        Ok(())
+    }
+}
+
+struct Recorder<'m, 'p, 'o> {
     measure: &'m dyn Fn(&Model, &State) -> Reading,
     records: Vec<Record>,
-    frames: Option<FrameOutput>,
+    output: Option<LiveOutput<'o, Record>>,
     progress: Option<&'p mut dyn Progress>,
     steps: usize,
+    /// Set once the user asked to stop: the next record is the last.
+    stopping: bool,
 }
 
-impl Observer for Recorder<'_, '_> {
+impl Observer for Recorder<'_, '_, '_> {
     fn record(&mut self, model: &Model, state: &State) -> anyhow::Result<()> {
-        let index = self.records.len();
         self.records.push(Record {
             time: state.time,
             reading: (self.measure)(model, state),
             energies: state.energies,
         });
         self.steps = state.step;
-        if let Some(frames) = &mut self.frames {
-            frames.at_record(index, model, state)?;
+        if let Some(output) = &mut self.output {
+            output.at_record(&self.records, self.stopping, model, state)?;
         }
         Ok(())
     }
@@ -334,6 +379,11 @@ impl Observer for Recorder<'_, '_> {
         if let Some(p) = self.progress.as_deref_mut() {
             p.update(state.time, state.step);
         }
+    }
+
+    fn interrupted(&mut self) -> bool {
+        self.stopping = self.progress.as_deref().is_some_and(|p| p.interrupted());
+        self.stopping
     }
 }
 
@@ -358,7 +408,7 @@ pub fn run_sheet_test(
     model: &Model,
     settings: &SolverSettings,
     measure: &dyn Fn(&Model, &State) -> Reading,
-    frames: Option<FrameOutput>,
+    output: Option<LiveOutput<'_, Record>>,
     progress: Option<&mut dyn Progress>,
     settle_time: f64,
 ) -> TestRun {
@@ -366,9 +416,10 @@ pub fn run_sheet_test(
     let mut recorder = Recorder {
         measure,
         records: Vec::new(),
-        frames,
+        output,
         progress,
         steps: 0,
+        stopping: false,
     };
     let outcome = solver::run(model, settings, &mut recorder);
     let wall_seconds = start.elapsed().as_secs_f64();

@@ -10,8 +10,8 @@
 //! between the clamps like a bias-extension specimen and are far softer.
 
 use super::sheet_test::{
-    clamped_strip, clamped_strip_measurement, validate_strip, Measurement, SheetTest, SheetTestRun,
-    TestProcess, TestRun,
+    clamped_strip, clamped_strip_measurement, validate_strip, Measurement, Record, SheetTest,
+    SheetTestRun, TestProcess,
 };
 use crate::material::Laminate;
 use crate::mesh::DiagonalPattern;
@@ -131,8 +131,8 @@ impl SheetTest for UniaxialTension {
         clamped_strip_measurement(model, &self.process, self.gauge_section(model))
     }
 
-    fn rows(&self, run: &TestRun) -> Vec<UniaxialRow> {
-        run.records
+    fn rows(&self, records: &[Record]) -> Vec<UniaxialRow> {
+        records
             .iter()
             .map(|r| UniaxialRow {
                 time: r.time,

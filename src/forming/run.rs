@@ -3,7 +3,7 @@
 //! shear angle, energies) and ParaView frames.
 
 use super::setup::FormingModel;
-use crate::experiment::sheet_test::{FrameOutput, Progress};
+use crate::experiment::sheet_test::{LiveOutput, Progress};
 use crate::solver::{self, Energies, Model, Observer, SolverError, State};
 use nalgebra::Vector3;
 use std::time::Instant;
@@ -39,19 +39,21 @@ pub struct FormingRun {
     pub wall_seconds: f64,
 }
 
-struct Recorder<'a, 'p> {
+struct Recorder<'a, 'p, 'o> {
     forming: &'a FormingModel,
     edge: Vec<usize>,
     nodal_area: Vec<f64>,
     records: Vec<FormingRecord>,
-    frames: Option<FrameOutput>,
+    output: Option<LiveOutput<'o, FormingRecord>>,
     progress: Option<&'p mut dyn Progress>,
     steps: usize,
     /// Time and punch impulse at the last record.
     last_impulse: Option<(f64, Vector3<f64>)>,
+    /// Set once the user asked to stop: the next record is the last.
+    stopping: bool,
 }
 
-impl Recorder<'_, '_> {
+impl Recorder<'_, '_, '_> {
     /// The punch force averaged since the last record, from the punch's impulse; the
     /// instantaneous force at the first record.
     fn mean_punch_force(&mut self, state: &State) -> f64 {
@@ -66,7 +68,7 @@ impl Recorder<'_, '_> {
     }
 }
 
-impl Observer for Recorder<'_, '_> {
+impl Observer for Recorder<'_, '_, '_> {
     fn record(&mut self, model: &Model, state: &State) -> anyhow::Result<()> {
         let f = self.forming;
         let holder = f.holder_tool;
@@ -83,8 +85,8 @@ impl Observer for Recorder<'_, '_> {
             energies: state.energies,
         });
         self.steps = state.step;
-        if let Some(frames) = &mut self.frames {
-            frames.at_record(self.records.len() - 1, model, state)?;
+        if let Some(output) = &mut self.output {
+            output.at_record(&self.records, self.stopping, model, state)?;
         }
         Ok(())
     }
@@ -95,12 +97,18 @@ impl Observer for Recorder<'_, '_> {
             p.update(state.time, state.step);
         }
     }
+
+    fn interrupted(&mut self) -> bool {
+        self.stopping = self.progress.as_deref().is_some_and(|p| p.interrupted());
+        self.stopping
+    }
 }
 
-/// Runs the forming model, recording at every output interval.
+/// Runs the forming model, recording at every output interval; `output` is written as the
+/// run goes.
 pub fn run(
     forming: &FormingModel,
-    frames: Option<FrameOutput>,
+    output: Option<LiveOutput<'_, FormingRecord>>,
     progress: Option<&mut dyn Progress>,
 ) -> FormingRun {
     let start = Instant::now();
@@ -110,10 +118,11 @@ pub fn run(
         edge,
         nodal_area: forming.model.nodal_areas(),
         records: Vec::new(),
-        frames,
+        output,
         progress,
         steps: 0,
         last_impulse: None,
+        stopping: false,
     };
     let outcome = solver::run(&forming.model, &forming.settings, &mut recorder);
     let steps = match &outcome {

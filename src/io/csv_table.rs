@@ -3,7 +3,7 @@
 
 use super::InputError;
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// A numeric table whose columns are exactly the ones asked for, in that order.
 #[derive(Clone, Debug, PartialEq)]
@@ -185,6 +185,88 @@ pub fn check_finite_row(header: &[&str], row: usize, values: &[f64]) -> std::io:
     }
 }
 
+/// A CSV file written while a run goes: the header when it is created, then one row per
+/// [`CsvStream::write_row`], each in a single write straight to the file (no buffer), so that a
+/// run killed at any instant leaves whole rows only.
+#[derive(Debug)]
+pub struct CsvStream {
+    path: PathBuf,
+    file: std::fs::File,
+    header: Vec<String>,
+    /// Data rows written so far.
+    rows: usize,
+}
+
+/// A file of results that could not be written, named.
+#[derive(Debug, thiserror::Error)]
+#[error("cannot write {}: {source}", path.display())]
+pub struct WriteError {
+    pub path: PathBuf,
+    pub source: std::io::Error,
+}
+
+impl CsvStream {
+    /// Creates (or empties) `path` and writes `header` into it.
+    pub fn create(path: &Path, header: &[&str]) -> Result<Self, WriteError> {
+        let failed = |source| WriteError {
+            path: path.to_path_buf(),
+            source,
+        };
+        let file = std::fs::File::create(path).map_err(failed)?;
+        let mut stream = Self {
+            path: path.to_path_buf(),
+            file,
+            header: header.iter().map(|h| h.to_string()).collect(),
+            rows: 0,
+        };
+        stream.write_line(format!("{}\n", header.join(",")))?;
+        Ok(stream)
+    }
+
+    /// Appends one row of numbers (10 significant digits); it must have one per column.
+    pub fn write_row(&mut self, row: &[f64]) -> Result<(), WriteError> {
+        let failed = |source| WriteError {
+            path: self.path.clone(),
+            source,
+        };
+        if row.len() != self.header.len() {
+            return Err(failed(std::io::Error::new(
+                std::io::ErrorKind::InvalidInput,
+                format!(
+                    "a row of {} cells for {} columns",
+                    row.len(),
+                    self.header.len()
+                ),
+            )));
+        }
+        let header: Vec<&str> = self.header.iter().map(String::as_str).collect();
+        check_finite_row(&header, self.rows + 1, row).map_err(failed)?;
+        self.write_line(csv_line(row))?;
+        self.rows += 1;
+        Ok(())
+    }
+
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    fn write_line(&mut self, line: String) -> Result<(), WriteError> {
+        self.file
+            .write_all(line.as_bytes())
+            .and_then(|()| self.file.flush())
+            .map_err(|source| WriteError {
+                path: self.path.clone(),
+                source,
+            })
+    }
+}
+
+/// One row as a CSV line, newline included.
+fn csv_line(row: &[f64]) -> String {
+    let cells: Vec<String> = row.iter().map(|&v| significant_digits(v)).collect();
+    format!("{}\n", cells.join(","))
+}
+
 /// `v` rounded to 10 significant digits, in its shortest exponent form (`1.8e0`, `-2.5e-7`).
 fn significant_digits(v: f64) -> String {
     let rounded: f64 = format!("{v:.9e}").parse().unwrap_or(v);
@@ -254,5 +336,34 @@ mod tests {
         write_csv(&mut out, &["x", "y"], [[1.0, -2.5e-7], [3.25, 1e6]]).unwrap();
         let t = parse_csv_table(std::str::from_utf8(&out).unwrap(), "o.csv", &["x", "y"]).unwrap();
         assert_eq!(t.rows, vec![vec![1.0, -2.5e-7], vec![3.25, 1e6]]);
+    }
+
+    #[test]
+    fn streamed_rows_are_on_disk_after_each_call() {
+        let dir =
+            std::env::temp_dir().join(format!("thermostamp-csv-stream-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("h.csv");
+        let mut csv = CsvStream::create(&path, &["x", "y"]).unwrap();
+        csv.write_row(&[1.0, -2.5e-7]).unwrap();
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert_eq!(text, "x,y\n1e0,-2.5e-7\n");
+        csv.write_row(&[3.25, 1e6]).unwrap();
+        let t = read_csv_table(&path, &["x", "y"]).unwrap();
+        assert_eq!(t.rows, vec![vec![1.0, -2.5e-7], vec![3.25, 1e6]]);
+        let e = csv.write_row(&[1.0]).unwrap_err();
+        assert!(e.to_string().contains("h.csv"), "{e}");
+        let e = csv.write_row(&[f64::NAN, 1.0]).unwrap_err();
+        assert!(e.to_string().contains("column 'x', row 3"), "{e}");
+        let t = read_csv_table(&path, &["x", "y"]).unwrap();
+        assert_eq!(t.rows.len(), 2, "the refused row is not written");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_full_disk_is_a_write_error_naming_the_file() {
+        let e = CsvStream::create(Path::new("/dev/full"), &["x"]).unwrap_err();
+        assert_eq!(e.source.raw_os_error(), Some(28), "{e}");
+        assert!(e.to_string().starts_with("cannot write /dev/full"), "{e}");
     }
 }

@@ -1,12 +1,13 @@
 //! Readers and writers of the files users hand in and get back.
 
 pub mod csv_table;
+pub mod output_folder;
 pub mod plot;
 pub mod sheet_frame;
 pub mod vtk;
 pub mod xy_curve;
 
-pub use csv_table::{read_csv_table, write_csv, CsvTable};
+pub use csv_table::{read_csv_table, write_csv, CsvStream, CsvTable, WriteError};
 
 /// Bad input, located in its file: `origin: line N: message`.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -12,7 +12,8 @@
 //! short writer and a base64 encoder.
 //!
 //! Every file is written to `NAME.tmp` and renamed, so a run that stops mid-write leaves
-//! either the old file or the new one, never half of one.
+//! either the old file or the new one, never half of one; a write that fails (a full disk)
+//! removes its temporary file.
 
 use std::fmt::{self, Display, Write as _};
 use std::path::{Path, PathBuf};
@@ -413,10 +414,14 @@ fn write_atomically(path: &Path, text: &str) -> Result<(), VtkError> {
     let mut tmp = path.as_os_str().to_owned();
     tmp.push(".tmp");
     let tmp = PathBuf::from(tmp);
-    std::fs::write(&tmp, text).map_err(|source| VtkError::Io {
-        path: tmp.clone(),
-        action: "write the file",
-        source,
+    std::fs::write(&tmp, text).map_err(|source| {
+        // a disk that filled up mid-write leaves a partial temporary file: not ours to leave
+        let _ = std::fs::remove_file(&tmp);
+        VtkError::Io {
+            path: path.to_path_buf(),
+            action: "write the file",
+            source,
+        }
     })?;
     std::fs::rename(&tmp, path).map_err(|source| {
         let _ = std::fs::remove_file(&tmp);

@@ -89,6 +89,12 @@ pub trait Observer {
     fn record(&mut self, model: &Model, state: &State) -> anyhow::Result<()>;
     /// Every few hundred steps, for progress reports.
     fn progress(&mut self, _state: &State) {}
+    /// Asked once per step: whether the user asked the run to stop (Ctrl-C). When it says yes
+    /// the run records the current state once more and stops with
+    /// [`SolverError::Interrupted`].
+    fn interrupted(&mut self) -> bool {
+        false
+    }
 }
 
 /// Why a run stopped early.
@@ -111,6 +117,8 @@ pub enum SolverError {
     Settings(String),
     #[error("writing results at t = {time:.6e} s: {source:#}")]
     Output { time: f64, source: anyhow::Error },
+    #[error("interrupted at step {step}, t = {time:.6e} s")]
+    Interrupted { step: usize, time: f64 },
 }
 
 /// What the element loop returns per element.
@@ -204,7 +212,8 @@ pub fn run(
             tool_contact(model, &mut state, full_step);
         }
         let last = state.time >= settings.end_time;
-        if last || state.time >= next_output - 1e-9 * settings.output_interval {
+        let stop = observer.interrupted();
+        if last || stop || state.time >= next_output - 1e-9 * settings.output_interval {
             state.energies.elastic = elastic_energy(model, &state)
                 .map_err(|(element, e)| unstable(&state, element, e.to_string()))?;
             observer
@@ -214,6 +223,12 @@ pub fn run(
                     source,
                 })?;
             next_output += settings.output_interval;
+        }
+        if stop {
+            return Err(SolverError::Interrupted {
+                step: state.step,
+                time: state.time,
+            });
         }
         if last {
             return Ok(state);
