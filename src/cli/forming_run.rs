@@ -38,6 +38,7 @@ fn forming(args: &Args) -> anyhow::Result<()> {
         n => Some(FrameOutput {
             series: PvdSeries::new(&dir, "forming")?,
             every: (scenario.output.history_points / n).max(1),
+            time_scaling: scenario.process.time_scaling,
         }),
     };
     let mut bar = Bar::new(forming.settings.end_time);

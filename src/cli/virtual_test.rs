@@ -288,6 +288,7 @@ fn frame_output(
     Ok(Some(FrameOutput {
         series: PvdSeries::new(dir, name)?,
         every: (records / frames).max(1),
+            time_scaling: 1.0,
     }))
 }
 

@@ -289,13 +289,22 @@ pub struct FrameOutput {
     pub series: PvdSeries,
     /// A frame every this many records.
     pub every: usize,
+    /// Process seconds per simulated second: a frame's time is the physical process time,
+    /// `time_scaling` times the solver's (a forming run's `process.time_scaling`; 1 for the
+    /// virtual tests, which are not time-scaled).
+    pub time_scaling: f64,
 }
 
 impl FrameOutput {
     /// Writes the frame of record number `index` (from 0) if it is one of every `every`.
     pub fn at_record(&mut self, index: usize, model: &Model, state: &State) -> anyhow::Result<()> {
         if index.is_multiple_of(self.every.max(1)) {
-            write_frame(&mut self.series, model, state)?;
+            write_frame(
+                &mut self.series,
+                model,
+                state,
+                state.time * self.time_scaling,
+            )?;
         }
         Ok(())
     }
@@ -337,11 +346,16 @@ impl Observer for Recorder<'_, '_> {
     }
 }
 
-/// Writes one ParaView frame of the sheet at `state` to `series`.
-pub fn write_frame(series: &mut PvdSeries, model: &Model, state: &State) -> anyhow::Result<()> {
+/// Writes one ParaView frame of the sheet at `state` to `series`, at `time` (s).
+pub fn write_frame(
+    series: &mut PvdSeries,
+    model: &Model,
+    state: &State,
+    time: f64,
+) -> anyhow::Result<()> {
     let frame = sheet_frame(model, state)?;
     series.add_frame(
-        state.time,
+        time,
         &VtuFrame {
             points: &frame.points,
             triangles: &model.mesh.triangles,
