@@ -40,9 +40,15 @@ fn run_ccx(dir: &Path) -> String {
     let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
     assert!(out.status.success(), "ccx failed:\n{stdout}");
     for bad in ["*WARNING", "*ERROR"] {
-        assert!(!stdout.contains(bad), "ccx: {bad} reading the deck:\n{stdout}");
+        assert!(
+            !stdout.contains(bad),
+            "ccx: {bad} reading the deck:\n{stdout}"
+        );
     }
-    assert!(stdout.contains("Job finished"), "ccx did not finish:\n{stdout}");
+    assert!(
+        stdout.contains("Job finished"),
+        "ccx did not finish:\n{stdout}"
+    );
     stdout
 }
 

@@ -73,7 +73,10 @@ fn check_export(dir: &Path, run: &Formed) {
     // at least 13 significant digits (numbers are written in at most 20 characters)
     assert_eq!(mesh.nodes.len(), run.state.positions.len());
     for (back, x) in mesh.nodes.iter().zip(&run.state.positions) {
-        assert!((back - x).amax() <= 5e-13 * x.amax(), "{x:?} read back as {back:?}");
+        assert!(
+            (back - x).amax() <= 5e-13 * x.amax(),
+            "{x:?} read back as {back:?}"
+        );
     }
     assert_eq!(mesh.triangles, model.mesh.triangles);
     let warp = mesh.warp_directions.as_ref().unwrap();

@@ -257,7 +257,7 @@ fn run_and_report(
     history_points: usize,
     run: impl FnOnce(Option<FrameOutput>, &mut dyn Progress) -> Result<(TestRun, TestReport), String>,
 ) -> anyhow::Result<()> {
-    let frames = frame_output(&c.output, name, c.frames, history_points)?;
+    let frames = frame_output(&c.output, name, (c.frames, history_points), time_scaling)?;
     let wrote_frames = frames.is_some();
     let mut bar = Bar::new(end_time);
     let (run, report) = run(frames, &mut bar).map_err(|e| anyhow::anyhow!("{label}: {e}"))?;
@@ -274,11 +274,13 @@ fn run_and_report(
     run.outcome.map(|_| ()).map_err(anyhow::Error::from)
 }
 
+/// `frames` frames of `records` records, at process times (the run's times times
+/// `time_scaling`).
 fn frame_output(
     dir: &Path,
     name: &str,
-    frames: usize,
-    records: usize,
+    (frames, records): (usize, usize),
+    time_scaling: f64,
 ) -> anyhow::Result<Option<FrameOutput>> {
     std::fs::create_dir_all(dir)
         .with_context(|| format!("cannot create the output folder {}", dir.display()))?;
@@ -288,7 +290,7 @@ fn frame_output(
     Ok(Some(FrameOutput {
         series: PvdSeries::new(dir, name)?,
         every: (records / frames).max(1),
-            time_scaling: 1.0,
+        time_scaling,
     }))
 }
 

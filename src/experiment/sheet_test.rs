@@ -289,9 +289,8 @@ pub struct FrameOutput {
     pub series: PvdSeries,
     /// A frame every this many records.
     pub every: usize,
-    /// Process seconds per simulated second: a frame's time is the physical process time,
-    /// `time_scaling` times the solver's (a forming run's `process.time_scaling`; 1 for the
-    /// virtual tests, which are not time-scaled).
+    /// Process seconds per simulated second (the run's time scaling): a frame's time is the
+    /// physical process time, `time_scaling` times the solver's.
     pub time_scaling: f64,
 }
 

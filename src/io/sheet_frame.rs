@@ -4,9 +4,9 @@ use super::vtk::{Field, FieldData};
 use crate::material::fabric::shear_angle;
 use crate::material::laminate::Laminate;
 use crate::material::{MaterialError, MembraneKinematics};
-use std::sync::Arc;
 use crate::solver::{Model, State};
 use nalgebra::{Matrix2, Matrix3, Vector3};
+use std::sync::Arc;
 
 /// Points, triangles and fields of one frame, owned.
 pub struct SheetFrame {

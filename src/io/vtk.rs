@@ -130,7 +130,9 @@ pub enum VtkError {
         index: usize,
         value: f64,
     },
-    #[error("field '{field}': code {code} at {location} {index}, but only {codes} codes have a meaning")]
+    #[error(
+        "field '{field}': code {code} at {location} {index}, but only {codes} codes have a meaning"
+    )]
     UnknownCode {
         field: String,
         location: Location,

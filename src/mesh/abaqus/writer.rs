@@ -306,10 +306,23 @@ mod tests {
     #[test]
     fn numbers_fit_twenty_characters_and_keep_what_fits() {
         // the shortest round-trip form where it fits: read back bit for bit
-        for x in [1.0, -79.99483755371092, 1e-7, 0.1, -5e-324, 1e300, 0.0, -0.0] {
+        for x in [
+            1.0,
+            -79.99483755371092,
+            1e-7,
+            0.1,
+            -5e-324,
+            1e300,
+            0.0,
+            -0.0,
+        ] {
             let text = abaqus_number(x);
             assert!(text.len() <= MAX_FIELD, "{text}");
-            assert_eq!(text.parse::<f64>().unwrap().to_bits(), x.to_bits(), "{text}");
+            assert_eq!(
+                text.parse::<f64>().unwrap().to_bits(),
+                x.to_bits(),
+                "{text}"
+            );
         }
         // too long in every exact form: as many digits as fit, no trailing zeros
         for (x, written) in [
