@@ -101,8 +101,7 @@ fn parse(text: &str) -> Read {
             "field" => {
                 let grid = read.grids.get_mut(&current).unwrap();
                 let (_, values) = line.split_once(" values ").unwrap();
-                grid.fields
-                    .insert(words[1].to_string(), values.to_string());
+                grid.fields.insert(words[1].to_string(), values.to_string());
             }
             other => panic!("unexpected reader line '{other}': {line}"),
         }

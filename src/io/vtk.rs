@@ -523,3 +523,61 @@ fn write_atomically(path: &Path, text: &str) -> Result<(), VtkError> {
         }
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn frame_with(point_data: &[Field]) -> Result<String, VtkError> {
+        vtu_document(&VtuFrame {
+            points: &[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+            triangles: &[[0, 1, 2]],
+            point_data,
+            cell_data: &[],
+        })
+    }
+
+    #[test]
+    fn vectors_carry_component_names_and_codes_their_meanings() {
+        let text = frame_with(&[
+            Field {
+                name: "velocity".into(),
+                data: FieldData::Vector(vec![[0.0; 3]; 3]),
+            },
+            Field {
+                name: "status".into(),
+                data: FieldData::Codes {
+                    values: vec![0, 1, 0],
+                    meanings: vec!["free".into(), "punch".into()],
+                },
+            },
+        ])
+        .unwrap();
+        assert!(text.contains(
+            "Name=\"velocity\" NumberOfComponents=\"3\" ComponentName0=\"x\" \
+             ComponentName1=\"y\" ComponentName2=\"z\""
+        ));
+        assert!(text.contains("<DataArray type=\"Int32\" Name=\"status\""));
+        // "0 free", "1 punch", each ended by a 0, as VTK writes string arrays in ASCII
+        assert!(text.contains(
+            "Name=\"status_codes\" NumberOfTuples=\"2\" format=\"ascii\">\n\
+             48 32 102 114 101 101 0 49 32 112 117 110 99 104 0\n"
+        ));
+    }
+
+    #[test]
+    fn a_code_without_a_meaning_is_refused() {
+        let error = frame_with(&[Field {
+            name: "status".into(),
+            data: FieldData::Codes {
+                values: vec![0, 2, 0],
+                meanings: vec!["free".into(), "punch".into()],
+            },
+        }])
+        .unwrap_err();
+        assert_eq!(
+            error.to_string(),
+            "field 'status': code 2 at point 1, but only 2 codes have a meaning"
+        );
+    }
+}
