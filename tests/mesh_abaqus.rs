@@ -9,7 +9,7 @@ use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 use thermostamp::mesh::abaqus::{
     parse_inp, read_inp, read_inp_with_thickness, write_inp, write_inp_to, AbaqusMesh,
-    ElementOutput,
+    ElementOutput, MAX_FIELD,
 };
 use thermostamp::mesh::{rectangle, DiagonalPattern, Mesh, MeshFileError};
 
@@ -82,12 +82,27 @@ fn warp(mesh: &Mesh) -> Vec<Vector3<f64>> {
         .collect()
 }
 
+/// `back` is `x` written in at most 20 characters and read again: the same `f64` where its
+/// shortest round-trip form fits (plain or scientific), else within half a unit of the 13th
+/// significant digit (the fewest the writer keeps: "-1.234567890123e-300").
+fn assert_read_back(back: f64, x: f64) {
+    let fits = format!("{x:?}").len() <= MAX_FIELD || format!("{x:e}").len() <= MAX_FIELD;
+    if fits {
+        assert_eq!(back.to_bits(), x.to_bits(), "{x:?} read back as {back:?}");
+    } else {
+        assert!(
+            (back - x).abs() <= 5e-13 * x.abs(),
+            "{x:?} read back as {back:?}"
+        );
+    }
+}
+
 fn assert_same_mesh(read: &AbaqusMesh, mesh: &Mesh, warp: Option<&[Vector3<f64>]>) {
     let back = &read.import.mesh;
     assert_eq!(back.nodes.len(), mesh.nodes.len());
     for (p, q) in back.nodes.iter().zip(&mesh.nodes) {
         for k in 0..3 {
-            assert_eq!(p[k].to_bits(), q[k].to_bits(), "{p:?} != {q:?}");
+            assert_read_back(p[k], q[k]);
         }
     }
     assert_eq!(back.triangles, mesh.triangles);
@@ -807,6 +822,16 @@ fn valid_deck() -> String {
     )
 }
 
+/// A finite float of any sign and magnitude from 1e-300 to 1e150 (squares stay finite, so
+/// that areas are), with up to 17 significant digits, or zero.
+fn any_magnitude() -> impl Strategy<Value = f64> {
+    prop_oneof![
+        1 => Just(0.0),
+        9 => (-9.999_999_999_999_999f64..9.999_999_999_999_999, -300i32..150)
+            .prop_map(|(m, e)| m * 10f64.powi(e)),
+    ]
+}
+
 const SELF: &str = "*NODE\n1000, 0, 0, 0\n";
 
 #[test]
@@ -837,6 +862,53 @@ const TOKENS: [&str; 16] = [
 
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(200))]
+
+    /// Any coordinates, warp directions and thicknesses: every numeric field of the deck has at
+    /// most 20 characters, no data line more than 16 entries, no line more than 256
+    /// characters (the Abaqus input rules, which CalculiX shares), and the deck reads back
+    /// within the precision written.
+    #[test]
+    fn every_field_of_a_written_deck_fits_abaqus_and_reads_back(
+        scale in any_magnitude(),
+        jitter in prop::collection::vec(-0.2f64..0.2, 12),
+        warp in prop::collection::vec(any_magnitude(), 6),
+        thickness in prop::collection::vec(any_magnitude(), 2),
+    ) {
+        // a unit square of two triangles, its corners moved by up to 0.2 in x, y and z (so
+        // that no triangle degenerates), at any scale
+        let mut mesh = rectangle(1.0, 1.0, 1, 1, DiagonalPattern::Right);
+        for (n, x) in mesh.nodes.iter_mut().enumerate() {
+            *x = (*x + Vector3::from_column_slice(&jitter[3 * n..3 * n + 3])) * scale;
+        }
+        prop_assume!(mesh.validate().is_ok());
+        let output = ElementOutput {
+            warp: warp.chunks(3).map(Vector3::from_column_slice).collect(),
+            thickness: thickness.iter().map(|t| t.abs()).collect(),
+        };
+        let mut bytes = Vec::new();
+        prop_assume!(write_inp_to(&mut bytes, "out.inp", &mesh, Some(&output)).is_ok());
+        let text = String::from_utf8(bytes).unwrap();
+        for line in text.lines() {
+            prop_assert!(line.len() <= 256, "{line}");
+            if line.starts_with('*') {
+                continue;
+            }
+            let fields: Vec<&str> = line.split(',').map(str::trim).collect();
+            prop_assert!(fields.len() <= 16, "{line}");
+            for field in fields.iter().filter(|f| f.parse::<f64>().is_ok()) {
+                prop_assert!(field.len() <= MAX_FIELD, "{field} in {line}");
+            }
+        }
+        let read = deck(&text);
+        for (p, q) in read.import.mesh.nodes.iter().zip(&mesh.nodes) {
+            for k in 0..3 {
+                assert_read_back(p[k], q[k]);
+            }
+        }
+        for (back, t) in read.thickness.iter().zip(&output.thickness) {
+            assert_read_back(back.unwrap(), *t);
+        }
+    }
 
     #[test]
     fn arbitrary_bytes_never_panic(bytes in prop::collection::vec(any::<u8>(), 0..2000)) {

@@ -7,6 +7,7 @@ use crate::forming::drape_preview::{drape_preview, Generators};
 use crate::io::vtk::{write_vtu, Field, FieldData, VtuFrame};
 use crate::io::write_csv;
 use anyhow::Context;
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 #[derive(clap::Args, Debug)]
@@ -104,20 +105,27 @@ fn write_cells(dir: &Path, net: &DrapeResult) -> anyhow::Result<PathBuf> {
     Ok(path)
 }
 
-/// `drape.vtu`: each cell of the net as two triangles carrying its shear angle.
+/// `drape.vtu`: each cell of the net as two triangles carrying its shear angle, on one point
+/// per node of the net (neighbouring cells share their corners, as in the net).
 fn write_net(dir: &Path, net: &DrapeResult) -> anyhow::Result<PathBuf> {
     let mut points = Vec::new();
+    let mut point_of: HashMap<(i64, i64), usize> = HashMap::new();
     let mut triangles = Vec::new();
     let mut shear = Vec::new();
     for c in net.cells() {
-        let corners = [(0, 0), (1, 0), (1, 1), (0, 1)].map(|(a, b)| net.node(c.i + a, c.j + b));
-        if let [Some(p0), Some(p1), Some(p2), Some(p3)] = corners {
-            let base = points.len();
-            points.extend([p0, p1, p2, p3]);
-            triangles.push([base, base + 1, base + 2]);
-            triangles.push([base, base + 2, base + 3]);
-            shear.extend([c.shear_deg, c.shear_deg]);
+        let nodes = [(0, 0), (1, 0), (1, 1), (0, 1)].map(|(a, b)| (c.i + a, c.j + b));
+        if nodes.iter().any(|&(i, j)| net.node(i, j).is_none()) {
+            continue;
         }
+        let [p0, p1, p2, p3] = nodes.map(|(i, j)| {
+            *point_of.entry((i, j)).or_insert_with(|| {
+                points.extend(net.node(i, j));
+                points.len() - 1
+            })
+        });
+        triangles.push([p0, p1, p2]);
+        triangles.push([p0, p2, p3]);
+        shear.extend([c.shear_deg, c.shear_deg]);
     }
     let path = dir.join("drape.vtu");
     let cell_data = [Field {

@@ -44,6 +44,7 @@ fn forming(args: &Args) -> anyhow::Result<()> {
             n => Some(FrameOutput {
                 series: PvdSeries::new(&dir, SERIES)?,
                 every: (scenario.output.history_points / n).max(1),
+                time_scaling: scenario.process.time_scaling,
             }),
         },
     };

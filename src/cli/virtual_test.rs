@@ -362,7 +362,7 @@ fn run_and_report(
         .collect();
     let output = OpenOutput {
         csv: Some(CsvStream::create(&csv, &header)?),
-        frames: frame_output(&c.output, name, c.frames, history_points)?,
+        frames: frame_output(&c.output, name, (c.frames, history_points), time_scaling)?,
     };
     let wrote_frames = output.frames.is_some();
     let stop = interrupt_flag()?;
@@ -400,11 +400,13 @@ fn products(name: &str) -> ProductFiles {
 /// The plots of the tests: `<name>-<suffix>.png`.
 const PLOT_SUFFIXES: [&str; 2] = ["force", "shear-angle"];
 
+/// `frames` frames of `records` records, at process times (the run's times times
+/// `time_scaling`).
 fn frame_output(
     dir: &Path,
     name: &str,
-    frames: usize,
-    records: usize,
+    (frames, records): (usize, usize),
+    time_scaling: f64,
 ) -> anyhow::Result<Option<FrameOutput>> {
     if frames == 0 {
         return Ok(None);
@@ -412,6 +414,7 @@ fn frame_output(
     Ok(Some(FrameOutput {
         series: PvdSeries::new(dir, name)?,
         every: (records / frames).max(1),
+        time_scaling,
     }))
 }
 

@@ -290,11 +290,15 @@ pub struct FrameOutput {
     pub series: PvdSeries,
     /// A frame every this many records.
     pub every: usize,
+    /// Process seconds per simulated second (the run's time scaling): a frame's time is the
+    /// physical process time, `time_scaling` times the solver's.
+    pub time_scaling: f64,
 }
 
 impl FrameOutput {
     /// Writes the frame of record number `index` (from 0) if it is one of every `every`, or
-    /// if it is the `last` of a run that stops.
+    /// if it is the `last` of a run that stops; at process time (the run's time times
+    /// `time_scaling`).
     pub fn at_record(
         &mut self,
         index: usize,
@@ -303,7 +307,12 @@ impl FrameOutput {
         state: &State,
     ) -> anyhow::Result<()> {
         if last || index.is_multiple_of(self.every.max(1)) {
-            write_frame(&mut self.series, model, state)?;
+            write_frame(
+                &mut self.series,
+                model,
+                state,
+                state.time * self.time_scaling,
+            )?;
         }
         Ok(())
     }
@@ -387,11 +396,16 @@ impl Observer for Recorder<'_, '_, '_> {
     }
 }
 
-/// Writes one ParaView frame of the sheet at `state` to `series`.
-pub fn write_frame(series: &mut PvdSeries, model: &Model, state: &State) -> anyhow::Result<()> {
+/// Writes one ParaView frame of the sheet at `state` to `series`, at `time` (s).
+pub fn write_frame(
+    series: &mut PvdSeries,
+    model: &Model,
+    state: &State,
+    time: f64,
+) -> anyhow::Result<()> {
     let frame = sheet_frame(model, state)?;
     series.add_frame(
-        state.time,
+        time,
         &VtuFrame {
             points: &frame.points,
             triangles: &model.mesh.triangles,

@@ -1,7 +1,8 @@
-//! The formed blank for the next analysis: an Abaqus deck with the nodes where the forming left
-//! them, S3R elements, and per element the formed warp direction and the formed thickness
-//! (docs/meshes.md, "What the writer writes"), so that a structural model starts from the
-//! fibre angles and thicknesses of the part; and a `.vtu` of the final state with every field.
+//! The formed blank for the next analysis: an Abaqus deck (which CalculiX reads as well) with
+//! the nodes where the forming left them, S3 elements, and per element the formed warp
+//! direction and the formed thickness (docs/meshes.md, "What the writer writes"), so that a
+//! structural model starts from the fibre angles and thicknesses of the part; and a `.vtu` of
+//! the final state with every field.
 
 use crate::io::sheet_frame::sheet_frame;
 use crate::io::vtk::{write_vtu, VtuFrame};

@@ -2,9 +2,11 @@
 
 use super::vtk::{Field, FieldData};
 use crate::material::fabric::shear_angle;
+use crate::material::laminate::Laminate;
 use crate::material::{MaterialError, MembraneKinematics};
 use crate::solver::{Model, State};
 use nalgebra::{Matrix2, Matrix3, Vector3};
+use std::sync::Arc;
 
 /// Points, triangles and fields of one frame, owned.
 pub struct SheetFrame {
@@ -22,11 +24,13 @@ fn in_plane(t: &Matrix3<f64>) -> [f64; 3] {
     [t[(0, 0)], t[(1, 1)], t[(0, 1)]]
 }
 
-/// Point data: displacement, velocity, reaction; with tools, the contact pressure (MPa), the
-/// contact status (1 + index of the tool pressing hardest, 0 when free) and the gap of the
-/// blank's faces to each tool (mm, `gap_<tool>`). Cell data: shear angle (degrees), current
-/// warp and weft directions, thickness, membrane forces `N` (xx, yy, xy in the reference
-/// x–y axes, N/mm) and each layer's 2nd Piola–Kirchhoff stress (xx, yy, xy, MPa).
+/// Point data: displacement, velocity, reaction (x, y, z); with tools, the contact pressure
+/// (MPa), the contact status (0 free, `1 + k` when tool `k` presses hardest; the codes'
+/// meanings are in the file as `contact_status_codes`) and the gap of the blank's faces to
+/// each tool (mm, `gap_<tool>`). Cell data: shear angle (degrees), current warp and weft
+/// directions, thickness, membrane forces `membrane_force` (xx, yy, xy in the reference x–y
+/// axes, N/mm) and the 2nd Piola–Kirchhoff stress of each material of the stack
+/// (`stress_matrix`, `stress_fabric`: xx, yy, xy, MPa), whatever the card's stack.
 pub fn sheet_frame(model: &Model, state: &State) -> Result<SheetFrame, MaterialError> {
     let points = state.positions.iter().map(vector).collect();
     let displacement = state
@@ -96,26 +100,46 @@ pub fn sheet_frame(model: &Model, state: &State) -> Result<SheetFrame, MaterialE
             data: FieldData::Scalar(state.membrane.iter().map(|m| m.thickness).collect()),
         },
         Field {
-            name: "membrane_force_xx_yy_xy".into(),
-            data: FieldData::Vector(membrane),
+            name: "membrane_force".into(),
+            data: FieldData::InPlaneTensor(membrane),
         },
     ];
-    for (k, values) in layers.into_iter().enumerate() {
-        let name = format!(
-            "layer{}_{}_S_xx_yy_xy",
-            k + 1,
-            model.laminate.layers()[k].law.name()
-        );
-        cell_data.push(Field {
-            name,
-            data: FieldData::Vector(values),
-        });
+    for (values, name) in layers.into_iter().zip(layer_names(&model.laminate)) {
+        if let Some(name) = name {
+            cell_data.push(Field {
+                name,
+                data: FieldData::InPlaneTensor(values),
+            });
+        }
     }
     Ok(SheetFrame {
         points,
         point_data,
         cell_data,
     })
+}
+
+/// The stress array's name of each layer: `stress_<material>` for the first layer of each
+/// material (`stress_<material>_2`, ... for further materials of the same kind), `None` for a
+/// layer that shares its law with an earlier one (the two matrix skins): its stress is the same.
+fn layer_names(laminate: &Laminate) -> Vec<Option<String>> {
+    let layers = laminate.layers();
+    let mut names = Vec::with_capacity(layers.len());
+    let mut kinds: Vec<&str> = Vec::new();
+    for (k, layer) in layers.iter().enumerate() {
+        if layers[..k].iter().any(|l| Arc::ptr_eq(&l.law, &layer.law)) {
+            names.push(None);
+            continue;
+        }
+        let kind = layer.law.name();
+        let earlier = kinds.iter().filter(|&&n| n == kind).count();
+        kinds.push(kind);
+        names.push(Some(match earlier {
+            0 => format!("stress_{kind}"),
+            n => format!("stress_{kind}_{}", n + 1),
+        }));
+    }
+    names
 }
 
 /// Contact pressure, status and gaps of every node (see [`sheet_frame`]).
@@ -136,8 +160,11 @@ fn contact_fields(model: &Model, state: &State) -> Vec<Field> {
                 .enumerate()
                 .filter(|(_, &f)| f > 0.0)
                 .max_by(|a, b| a.1.total_cmp(b.1))
-                .map_or(0.0, |(k, _)| (k + 1) as f64)
+                .map_or(0, |(k, _)| k as u32 + 1)
         })
+        .collect();
+    let meanings = std::iter::once("free".to_string())
+        .chain(model.tools.iter().map(|t| t.name.clone()))
         .collect();
     let mut fields = vec![
         Field {
@@ -146,7 +173,10 @@ fn contact_fields(model: &Model, state: &State) -> Vec<Field> {
         },
         Field {
             name: "contact_status".into(),
-            data: FieldData::Scalar(status),
+            data: FieldData::Codes {
+                values: status,
+                meanings,
+            },
         },
     ];
     for (k, tool) in model.tools.iter().enumerate() {

@@ -25,7 +25,16 @@ const VTK_TRIANGLE: u8 = 5;
 #[derive(Clone, Debug, PartialEq)]
 pub enum FieldData {
     Scalar(Vec<f64>),
+    /// Components x, y, z (global axes).
     Vector(Vec<[f64; 3]>),
+    /// A symmetric in-plane tensor: components xx, yy, xy.
+    InPlaneTensor(Vec<[f64; 3]>),
+    /// Integer codes, with what each means: `meanings[k]` for code `k`. The meanings go into
+    /// the file as a string array `<name>_codes` of the grid's field data ("0 free", ...).
+    Codes {
+        values: Vec<u32>,
+        meanings: Vec<String>,
+    },
 }
 
 impl FieldData {
@@ -33,7 +42,8 @@ impl FieldData {
     pub fn len(&self) -> usize {
         match self {
             FieldData::Scalar(v) => v.len(),
-            FieldData::Vector(v) => v.len(),
+            FieldData::Vector(v) | FieldData::InPlaneTensor(v) => v.len(),
+            FieldData::Codes { values, .. } => values.len(),
         }
     }
 
@@ -42,17 +52,24 @@ impl FieldData {
     }
 
     fn components(&self) -> usize {
+        self.component_names().len().max(1)
+    }
+
+    /// The names ParaView shows for the components (`ComponentName0`, ...); none for scalars.
+    fn component_names(&self) -> &'static [&'static str] {
         match self {
-            FieldData::Scalar(_) => 1,
-            FieldData::Vector(_) => 3,
+            FieldData::Scalar(_) | FieldData::Codes { .. } => &[],
+            FieldData::Vector(_) => &["x", "y", "z"],
+            FieldData::InPlaneTensor(_) => &["xx", "yy", "xy"],
         }
     }
 
-    /// The values, component after component, point (or cell) after point.
+    /// The floating-point values, component after component, point (or cell) after point.
     fn flat(&self) -> &[f64] {
         match self {
             FieldData::Scalar(v) => v,
-            FieldData::Vector(v) => v.as_flattened(),
+            FieldData::Vector(v) | FieldData::InPlaneTensor(v) => v.as_flattened(),
+            FieldData::Codes { .. } => &[],
         }
     }
 }
@@ -113,6 +130,16 @@ pub enum VtkError {
         location: Location,
         index: usize,
         value: f64,
+    },
+    #[error(
+        "field '{field}': code {code} at {location} {index}, but only {codes} codes have a meaning"
+    )]
+    UnknownCode {
+        field: String,
+        location: Location,
+        index: usize,
+        code: u32,
+        codes: usize,
     },
     #[error(
         "triangles: triangle {triangle} uses point {point}, but the sheet has {points} points"
@@ -230,8 +257,12 @@ fn vtu_document(frame: &VtuFrame) -> Result<String, VtkError> {
         "<?xml version=\"1.0\"?>\n\
          <VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" \
          header_type=\"UInt64\">\n\
-         <UnstructuredGrid>\n\
-         <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">",
+         <UnstructuredGrid>"
+    );
+    push_code_meanings(&mut out, frame.point_data.iter().chain(frame.cell_data));
+    let _ = writeln!(
+        out,
+        "<Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">",
         frame.points.len(),
         frame.triangles.len()
     );
@@ -287,6 +318,17 @@ fn check_fields(fields: &[Field], location: Location, expected: usize) -> Result
             field.data.components(),
             field.data.flat(),
         )?;
+        if let FieldData::Codes { values, meanings } = &field.data {
+            if let Some(index) = values.iter().position(|&c| c as usize >= meanings.len()) {
+                return Err(VtkError::UnknownCode {
+                    field: name(),
+                    location,
+                    index,
+                    code: values[index],
+                    codes: meanings.len(),
+                });
+            }
+        }
     }
     Ok(())
 }
@@ -316,6 +358,7 @@ fn push_points(out: &mut String, points: &[[f64; 3]]) {
         "Float64",
         "Points",
         3,
+        &[],
         &f64_bytes(points.as_flattened()),
     );
     out.push_str("</Points>\n");
@@ -333,35 +376,88 @@ fn push_cells(out: &mut String, triangles: &[[usize; 3]]) {
         .collect();
     let types = vec![VTK_TRIANGLE; triangles.len()];
     out.push_str("<Cells>\n");
-    push_data_array(out, "Int64", "connectivity", 1, &connectivity);
-    push_data_array(out, "Int64", "offsets", 1, &offsets);
-    push_data_array(out, "UInt8", "types", 1, &types);
+    push_data_array(out, "Int64", "connectivity", 1, &[], &connectivity);
+    push_data_array(out, "Int64", "offsets", 1, &[], &offsets);
+    push_data_array(out, "UInt8", "types", 1, &[], &types);
     out.push_str("</Cells>\n");
 }
 
 fn push_fields(out: &mut String, section: &str, fields: &[Field]) {
     let _ = writeln!(out, "<{section}>");
     for field in fields {
-        push_data_array(
-            out,
-            "Float64",
-            &field.name,
-            field.data.components(),
-            &f64_bytes(field.data.flat()),
-        );
+        match &field.data {
+            FieldData::Codes { values, .. } => {
+                let bytes: Vec<u8> = values
+                    .iter()
+                    .flat_map(|v| (*v as i32).to_le_bytes())
+                    .collect();
+                push_data_array(out, "Int32", &field.name, 1, &[], &bytes);
+            }
+            data => push_data_array(
+                out,
+                "Float64",
+                &field.name,
+                data.components(),
+                data.component_names(),
+                &f64_bytes(data.flat()),
+            ),
+        }
     }
     let _ = writeln!(out, "</{section}>");
 }
 
-/// One inline binary `DataArray`: base64 of the byte count (`UInt64`) followed by the bytes,
-/// encoded as one stream, as VTK itself writes uncompressed data.
-fn push_data_array(out: &mut String, vtk_type: &str, name: &str, components: usize, bytes: &[u8]) {
-    let _ = writeln!(
+/// The meanings of every code field, as the grid's field data: one string array
+/// `<name>_codes` ("0 free", "1 punch", ...) per field of codes.
+fn push_code_meanings<'f>(out: &mut String, fields: impl Iterator<Item = &'f Field>) {
+    let legends: Vec<(&str, &[String])> = fields
+        .filter_map(|f| match &f.data {
+            FieldData::Codes { meanings, .. } => Some((f.name.as_str(), meanings.as_slice())),
+            _ => None,
+        })
+        .collect();
+    if legends.is_empty() {
+        return;
+    }
+    out.push_str("<FieldData>\n");
+    for (name, meanings) in legends {
+        // VTK's ASCII form of a string array: each string's bytes, then a 0
+        let mut codes = Vec::new();
+        for (k, meaning) in meanings.iter().enumerate() {
+            codes.extend(format!("{k} {meaning}").bytes().map(|b| b.to_string()));
+            codes.push("0".to_string());
+        }
+        let _ = writeln!(
+            out,
+            "<DataArray type=\"String\" Name=\"{}_codes\" NumberOfTuples=\"{}\" \
+             format=\"ascii\">\n{}\n</DataArray>",
+            xml_escape(name),
+            meanings.len(),
+            codes.join(" ")
+        );
+    }
+    out.push_str("</FieldData>\n");
+}
+
+/// One inline binary `DataArray` (with its components' names, if any): base64 of the byte
+/// count (`UInt64`) followed by the bytes, encoded as one stream, as VTK itself writes
+/// uncompressed data.
+fn push_data_array(
+    out: &mut String,
+    vtk_type: &str,
+    name: &str,
+    components: usize,
+    component_names: &[&str],
+    bytes: &[u8],
+) {
+    let _ = write!(
         out,
-        "<DataArray type=\"{vtk_type}\" Name=\"{}\" NumberOfComponents=\"{components}\" \
-         format=\"binary\">",
+        "<DataArray type=\"{vtk_type}\" Name=\"{}\" NumberOfComponents=\"{components}\"",
         xml_escape(name)
     );
+    for (k, component) in component_names.iter().enumerate() {
+        let _ = write!(out, " ComponentName{k}=\"{}\"", xml_escape(component));
+    }
+    out.push_str(" format=\"binary\">\n");
     let mut block = (bytes.len() as u64).to_le_bytes().to_vec();
     block.extend_from_slice(bytes);
     push_base64(out, &block);
@@ -431,4 +527,62 @@ fn write_atomically(path: &Path, text: &str) -> Result<(), VtkError> {
             source,
         }
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn frame_with(point_data: &[Field]) -> Result<String, VtkError> {
+        vtu_document(&VtuFrame {
+            points: &[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+            triangles: &[[0, 1, 2]],
+            point_data,
+            cell_data: &[],
+        })
+    }
+
+    #[test]
+    fn vectors_carry_component_names_and_codes_their_meanings() {
+        let text = frame_with(&[
+            Field {
+                name: "velocity".into(),
+                data: FieldData::Vector(vec![[0.0; 3]; 3]),
+            },
+            Field {
+                name: "status".into(),
+                data: FieldData::Codes {
+                    values: vec![0, 1, 0],
+                    meanings: vec!["free".into(), "punch".into()],
+                },
+            },
+        ])
+        .unwrap();
+        assert!(text.contains(
+            "Name=\"velocity\" NumberOfComponents=\"3\" ComponentName0=\"x\" \
+             ComponentName1=\"y\" ComponentName2=\"z\""
+        ));
+        assert!(text.contains("<DataArray type=\"Int32\" Name=\"status\""));
+        // "0 free", "1 punch", each ended by a 0, as VTK writes string arrays in ASCII
+        assert!(text.contains(
+            "Name=\"status_codes\" NumberOfTuples=\"2\" format=\"ascii\">\n\
+             48 32 102 114 101 101 0 49 32 112 117 110 99 104 0\n"
+        ));
+    }
+
+    #[test]
+    fn a_code_without_a_meaning_is_refused() {
+        let error = frame_with(&[Field {
+            name: "status".into(),
+            data: FieldData::Codes {
+                values: vec![0, 2, 0],
+                meanings: vec!["free".into(), "punch".into()],
+            },
+        }])
+        .unwrap_err();
+        assert_eq!(
+            error.to_string(),
+            "field 'status': code 2 at point 1, but only 2 codes have a meaning"
+        );
+    }
 }

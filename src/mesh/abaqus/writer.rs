@@ -1,5 +1,5 @@
-//! A mesh as an Abaqus deck: nodes, S3R elements, sets, and per element the warp direction
-//! (an orientation from a distribution) and the thickness (a shell thickness distribution).
+//! A mesh as an Abaqus deck that CalculiX reads as well: nodes, S3 elements, sets, and per
+//! element the warp direction (an orientation) and the thickness (a shell section).
 
 use crate::mesh::{Mesh, MeshFileError};
 use nalgebra::Vector3;
@@ -17,14 +17,69 @@ pub struct ElementOutput {
     pub thickness: Vec<f64>,
 }
 
-/// The material the written `*SHELL SECTION` refers to: the user defines it.
+/// The material the written `*SHELL SECTION`s refer to: the user defines it.
 pub const MATERIAL_NAME: &str = "PREPREG";
-/// The written names of the distributions and orientation.
-pub const WARP_TABLE: &str = "THERMOSTAMP_WARP_TABLE";
-pub const WARP_DISTRIBUTION: &str = "THERMOSTAMP_WARP";
-pub const ORIENTATION_NAME: &str = "THERMOSTAMP_ORIENTATION";
-pub const THICKNESS_TABLE: &str = "THERMOSTAMP_THICKNESS_TABLE";
-pub const THICKNESS_DISTRIBUTION: &str = "THERMOSTAMP_THICKNESS";
+/// Element `n`'s own element set is `THERMOSTAMP_E<n>`, its orientation `THERMOSTAMP_O<n>`:
+/// a section per element is the form of per-element thickness and orientation that both
+/// Abaqus and CalculiX read (CalculiX ignores `SHELL THICKNESS=` distributions and applies only
+/// the default line of an orientation `*DISTRIBUTION`).
+pub const SECTION_SET_PREFIX: &str = "THERMOSTAMP_E";
+pub const ORIENTATION_PREFIX: &str = "THERMOSTAMP_O";
+/// The widest numeric field that Abaqus (and CalculiX) read in a data line.
+pub const MAX_FIELD: usize = 20;
+
+/// Whether `name` is one of the per-element section sets this writer writes (any case).
+pub(in crate::mesh::abaqus) fn is_section_set(name: &str) -> bool {
+    name.len() > SECTION_SET_PREFIX.len()
+        && name.is_char_boundary(SECTION_SET_PREFIX.len())
+        && name[..SECTION_SET_PREFIX.len()].eq_ignore_ascii_case(SECTION_SET_PREFIX)
+        && name[SECTION_SET_PREFIX.len()..]
+            .bytes()
+            .all(|b| b.is_ascii_digit())
+}
+
+/// `x` in at most [`MAX_FIELD`] characters: the shortest form that reads back to the same
+/// `f64` where it fits (`1.0`, `-79.99483755371092`, `1e-7`), else scientific notation with
+/// as many significant digits as fit (at least 13; 15 for exponents of one digit), so that the
+/// value read back is within half a unit of the last digit written. `x` is finite.
+pub fn abaqus_number(x: f64) -> String {
+    let shortest = format!("{x:?}");
+    if shortest.len() <= MAX_FIELD {
+        return shortest;
+    }
+    let scientific = format!("{x:e}");
+    if scientific.len() <= MAX_FIELD {
+        return scientific;
+    }
+    let mut digits = 16;
+    loop {
+        let text = format!("{x:.digits$e}");
+        if text.len() <= MAX_FIELD || digits == 0 {
+            return without_trailing_zeros(&text);
+        }
+        digits -= 1;
+    }
+}
+
+/// `2.500e-300` as `2.5e-300`: rounding to fewer digits can leave zeros at the end.
+fn without_trailing_zeros(scientific: &str) -> String {
+    match scientific.split_once('e') {
+        Some((mantissa, exponent)) if mantissa.contains('.') => {
+            let mantissa = mantissa.trim_end_matches('0').trim_end_matches('.');
+            format!("{mantissa}e{exponent}")
+        }
+        _ => scientific.to_string(),
+    }
+}
+
+/// Numbers of a data line, each in at most [`MAX_FIELD`] characters.
+fn numbers(values: &[f64]) -> String {
+    values
+        .iter()
+        .map(|v| abaqus_number(*v))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
 
 /// Writes `mesh` to `path` as an Abaqus input file (see [`write_inp_to`]). Nothing is written
 /// when the mesh or `elements` is not valid.
@@ -41,12 +96,11 @@ pub fn write_inp(
 }
 
 /// Writes `mesh` as an Abaqus input file to `out` (`file` names it in errors): `*HEADING`,
-/// `*NODE`, `*ELEMENT, TYPE=S3R`, the node and element sets, and, where there are warp
-/// directions (`elements`, else `mesh.warp_directions`) or thicknesses, per element a
-/// `*DISTRIBUTION` of the local 1-axis behind an `*ORIENTATION` and a `*DISTRIBUTION` of the
-/// shell thickness, both used by a `*SHELL SECTION` on every element with material
-/// [`MATERIAL_NAME`]. Coordinates, directions and thicknesses are written in the shortest form
-/// that reads back to the same `f64`.
+/// `*NODE`, `*ELEMENT, TYPE=S3`, the node and element sets, and, where there are warp
+/// directions (`elements`, else `mesh.warp_directions`) or thicknesses, per element its own
+/// element set, `*ORIENTATION` (local 1-axis along the warp) and `*SHELL SECTION` (its
+/// thickness) with material [`MATERIAL_NAME`]. Every number is written by [`abaqus_number`]
+/// and no data line has more than 16 entries, so that Abaqus and CalculiX read the deck alike.
 pub fn write_inp_to<W: Write>(
     mut out: W,
     file: &str,
@@ -83,26 +137,34 @@ pub fn write_inp_to<W: Write>(
     }
     let node_sets = names(&mesh.node_sets, "node").map_err(error)?;
     let element_sets = names(&mesh.element_sets, "element").map_err(error)?;
+    let with_sections = warp.is_some() || thickness.is_some();
+    if let Some(name) = mesh.element_sets.keys().find(|n| is_section_set(n)) {
+        return Err(error(format!(
+            "element set '{name}' has the name of the per-element section sets \
+             ({SECTION_SET_PREFIX}<n>), which the reader does not keep"
+        )));
+    }
 
     let mut text = String::new();
     let count_nodes = mesh.nodes.len();
     // writing to a String cannot fail
     let _ = writeln!(
         text,
-        "** Written by thermostamp {}: {count_nodes} nodes, {count} 3-node shell elements (S3R).",
+        "** Written by thermostamp {}: {count_nodes} nodes, {count} 3-node shell elements (S3).",
         env!("CARGO_PKG_VERSION")
     );
-    if warp.is_some() || thickness.is_some() {
+    if with_sections {
         let _ = writeln!(
             text,
-            "** To run it in Abaqus, define *MATERIAL, NAME={MATERIAL_NAME} (the shell section at \
-             the end refers to it) and a step, or include this file in a deck that does."
+            "** To run it in Abaqus or CalculiX, define *MATERIAL, NAME={MATERIAL_NAME} (the \
+             shell sections\n** at the end refer to it) and a step, or include this file in a \
+             deck that does."
         );
     } else {
         let _ = writeln!(
             text,
-            "** To run it in Abaqus, add a shell section on the elements, its material and a step, \
-             or include this file in a deck that does."
+            "** To run it in Abaqus or CalculiX, add a shell section on the elements, its \
+             material and a step,\n** or include this file in a deck that does."
         );
     }
     let _ = writeln!(
@@ -111,9 +173,9 @@ pub fn write_inp_to<W: Write>(
     );
     text.push_str("*NODE\n");
     for (n, x) in mesh.nodes.iter().enumerate() {
-        let _ = writeln!(text, "{}, {:?}, {:?}, {:?}", n + 1, x.x, x.y, x.z);
+        let _ = writeln!(text, "{}, {}", n + 1, numbers(&[x.x, x.y, x.z]));
     }
-    text.push_str("*ELEMENT, TYPE=S3R\n");
+    text.push_str("*ELEMENT, TYPE=S3\n");
     for (t, [a, b, c]) in mesh.triangles.iter().enumerate() {
         let _ = writeln!(text, "{}, {}, {}, {}", t + 1, a + 1, b + 1, c + 1);
     }
@@ -128,98 +190,63 @@ pub fn write_inp_to<W: Write>(
         let _ = writeln!(text, "*ELSET, ELSET={name}");
         write_labels(&mut text, members);
     }
-    if warp.is_none() && thickness.is_none() {
-        out.write_all(text.as_bytes())
-            .map_err(|e| error(format!("cannot write: {e}")))?;
-        return Ok(());
+    if with_sections {
+        write_sections(&mut text, mesh, warp, thickness).map_err(error)?;
     }
+    out.write_all(text.as_bytes())
+        .map_err(|e| error(format!("cannot write: {e}")))
+}
 
-    // every element, for the section: internal, so that reading the file back gives the
-    // mesh's own element sets only
-    let mut all = "_THERMOSTAMP_BLANK".to_string();
-    let mut k = 1;
-    while mesh
-        .element_sets
-        .keys()
-        .any(|n| n.eq_ignore_ascii_case(&all))
-    {
-        k += 1;
-        all = format!("_THERMOSTAMP_BLANK_{k}");
-    }
+/// Per element: its element set, its orientation (where there is a warp) and its shell
+/// section (with its thickness where known).
+fn write_sections(
+    text: &mut String,
+    mesh: &Mesh,
+    warp: Option<&[Vector3<f64>]>,
+    thickness: Option<&[f64]>,
+) -> Result<(), String> {
     let _ = writeln!(
         text,
-        "*ELSET, ELSET={all}, INTERNAL, GENERATE\n1, {count}, 1"
+        "** Per element: its own element set, its orientation (local 1-axis a: the warp; b in \
+         the element,\n** normal to a) and its shell section (its thickness in mm, 5 \
+         integration points)."
     );
-    let mut section = format!("*SHELL SECTION, ELSET={all}, MATERIAL={MATERIAL_NAME}");
-    if let Some(warp) = warp {
-        let _ = writeln!(
-            text,
-            "** Warp direction per element: the local 1-axis is a, the 1-2 plane holds b (in the \
-             element, normal to a)."
-        );
-        let _ = writeln!(
-            text,
-            "*DISTRIBUTION TABLE, NAME={WARP_TABLE}\nCOORD3D, COORD3D"
-        );
-        let _ = writeln!(
-            text,
-            "*DISTRIBUTION, NAME={WARP_DISTRIBUTION}, LOCATION=ELEMENT, TABLE={WARP_TABLE}"
-        );
-        text.push_str(", 1.0, 0.0, 0.0, 0.0, 1.0, 0.0\n");
-        for (t, a) in warp.iter().enumerate() {
-            let [p, q, r] = mesh.triangles[t].map(|n| mesh.nodes[n]);
-            let normal = (q - p).cross(&(r - p)).normalize();
-            let b = normal.cross(a);
-            if !(a.iter().all(|c| c.is_finite()) && b.norm() > 1e-10 * a.norm()) {
-                return Err(error(format!(
-                    "triangle {t}: warp direction {a:?} is zero, not finite or normal to the \
-                     triangle"
-                )));
-            }
-            let _ = writeln!(
-                text,
-                "{}, {:?}, {:?}, {:?}, {:?}, {:?}, {:?}",
-                t + 1,
-                a.x,
-                a.y,
-                a.z,
-                b.x,
-                b.y,
-                b.z
-            );
-        }
-        let _ = writeln!(
-            text,
-            "*ORIENTATION, NAME={ORIENTATION_NAME}\n{WARP_DISTRIBUTION}\n3, 0.0"
-        );
-        let _ = write!(section, ", ORIENTATION={ORIENTATION_NAME}");
-    }
-    let mut section_data = ", 5".to_string();
-    if let Some(thickness) = thickness {
-        let _ = writeln!(text, "** Shell thickness per element (mm).");
-        let _ = writeln!(text, "*DISTRIBUTION TABLE, NAME={THICKNESS_TABLE}\nLENGTH");
-        let _ = writeln!(
-            text,
-            "*DISTRIBUTION, NAME={THICKNESS_DISTRIBUTION}, LOCATION=ELEMENT, \
-             TABLE={THICKNESS_TABLE}"
-        );
-        let mean = thickness.iter().sum::<f64>() / count as f64;
-        let _ = writeln!(text, ", {mean:?}");
-        for (t, h) in thickness.iter().enumerate() {
-            let _ = writeln!(text, "{}, {h:?}", t + 1);
-        }
-        let _ = write!(section, ", SHELL THICKNESS={THICKNESS_DISTRIBUTION}");
-        section_data = format!("{mean:?}, 5");
-    } else {
+    if thickness.is_none() {
         let _ = writeln!(
             text,
             "** The thickness is not known here: give it as the first value of the line after \
-             *SHELL SECTION."
+             each\n** *SHELL SECTION."
         );
     }
-    let _ = writeln!(text, "{section}\n{section_data}");
-    out.write_all(text.as_bytes())
-        .map_err(|e| error(format!("cannot write: {e}")))
+    for (t, &[p, q, r]) in mesh.triangles.iter().enumerate() {
+        let label = t + 1;
+        let _ = writeln!(text, "*ELSET, ELSET={SECTION_SET_PREFIX}{label}\n{label}");
+        let mut section =
+            format!("*SHELL SECTION, ELSET={SECTION_SET_PREFIX}{label}, MATERIAL={MATERIAL_NAME}");
+        if let Some(given) = warp.map(|w| w[t]) {
+            let normal = (mesh.nodes[q] - mesh.nodes[p])
+                .cross(&(mesh.nodes[r] - mesh.nodes[p]))
+                .normalize();
+            // unit axes: a direction of any length is written (and read back) alike
+            let a = (given / given.amax()).normalize();
+            let b = normal.cross(&a);
+            if !(given.iter().all(|c| c.is_finite()) && b.norm() > 1e-10) {
+                return Err(format!(
+                    "triangle {t}: warp direction {given:?} is zero, not finite or normal to \
+                     the triangle"
+                ));
+            }
+            let _ = writeln!(
+                text,
+                "*ORIENTATION, NAME={ORIENTATION_PREFIX}{label}\n{}\n3, 0.0",
+                numbers(&[a.x, a.y, a.z, b.x, b.y, b.z])
+            );
+            let _ = write!(section, ", ORIENTATION={ORIENTATION_PREFIX}{label}");
+        }
+        let h = thickness.map_or(String::new(), |h| abaqus_number(h[t]));
+        let _ = writeln!(text, "{section}\n{h}, 5");
+    }
+    Ok(())
 }
 
 /// 16 labels (indices + 1) a line, as Abaqus reads set data.
@@ -270,4 +297,50 @@ fn names<'m>(
         out.push((label, name.as_str()));
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_fit_twenty_characters_and_keep_what_fits() {
+        // the shortest round-trip form where it fits: read back bit for bit
+        for x in [
+            1.0,
+            -79.99483755371092,
+            1e-7,
+            0.1,
+            -5e-324,
+            1e300,
+            0.0,
+            -0.0,
+        ] {
+            let text = abaqus_number(x);
+            assert!(text.len() <= MAX_FIELD, "{text}");
+            assert_eq!(
+                text.parse::<f64>().unwrap().to_bits(),
+                x.to_bits(),
+                "{text}"
+            );
+        }
+        // too long in every exact form: as many digits as fit, no trailing zeros
+        for (x, written) in [
+            (-1.2345678901234567e-300, "-1.234567890123e-300"),
+            (-0.00021087190299357247, "-2.10871902993572e-4"),
+            (0.00021087190299357247, "2.108719029935725e-4"),
+            (-1.999_999_999_999_9e-300, "-2e-300"),
+        ] {
+            assert_eq!(abaqus_number(x), written);
+        }
+    }
+
+    #[test]
+    fn section_sets_are_recognised_in_any_case_and_only_with_a_number() {
+        assert!(is_section_set("THERMOSTAMP_E12"));
+        assert!(is_section_set("thermostamp_e3"));
+        assert!(!is_section_set("THERMOSTAMP_E"));
+        assert!(!is_section_set("THERMOSTAMP_EDGE"));
+        assert!(!is_section_set("THERMOSTAMP_É1"));
+    }
 }

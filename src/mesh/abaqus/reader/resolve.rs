@@ -3,6 +3,7 @@
 //! split, nodes of no element dropped, and the mesh validated.
 
 use super::super::lexer::{Deck, Loc};
+use super::super::writer::{is_section_set, SECTION_SET_PREFIX};
 use super::super::AbaqusMesh;
 use super::lookup::{IndexSet, Resolved, Use};
 use super::{supported_types, Axes, Model, Thickness, ELEMENT_TYPES};
@@ -110,9 +111,14 @@ impl Model {
             }
             mesh_node_sets.insert(set.name, members);
         }
+        let mut section_sets = 0;
         for set in element_sets.into_values() {
             if set.internal {
                 internal.push(set.name);
+                continue;
+            }
+            if is_section_set(&set.name) {
+                section_sets += 1;
                 continue;
             }
             let members: Vec<usize> = set.order.iter().flat_map(|&e| split.of(e)).collect();
@@ -123,6 +129,12 @@ impl Model {
             self.notes.push(format!(
                 "internal sets (INTERNAL: Abaqus/CAE's own) used but not kept: {}",
                 internal.join(", ")
+            ));
+        }
+        if section_sets > 0 {
+            self.notes.push(format!(
+                "{section_sets} per-element section sets ({SECTION_SET_PREFIX}<n>, as thermostamp \
+                 writes them) used but not kept"
             ));
         }
 

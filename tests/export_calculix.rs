@@ -1,0 +1,178 @@
+//! The exported formed blank read by a real reader: CalculiX (`ccx`) runs `formed-blank.inp`
+//! of a short forming run with a material and a static step appended, and a flat plate written
+//! by the same writer shows that CalculiX takes each element's orientation and thickness.
+//!
+//! Without `ccx` on the PATH these tests fail when `CI` is set (CI installs it: `.ci/run`) and
+//! are skipped, with a printed line, otherwise.
+
+mod common;
+
+use common::{run_ok, scratch_dir};
+use nalgebra::Vector3;
+use std::path::Path;
+use std::process::Command;
+use thermostamp::mesh::abaqus::{write_inp, ElementOutput};
+use thermostamp::mesh::{rectangle, DiagonalPattern};
+
+/// Whether `ccx` can be run; `false` (skip) only outside CI.
+fn ccx_available(test: &str) -> bool {
+    let found = Command::new("ccx").arg("-v").output().is_ok();
+    if !found {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "CI is set but CalculiX (ccx) is not on the PATH: install calculix-ccx"
+        );
+        println!("{test}: skipped, CalculiX (ccx) is not installed");
+    }
+    found
+}
+
+/// Runs `ccx` on `dir/job.inp` and returns its standard output, after checking that it read
+/// every card (no `*WARNING`, no `*ERROR`) and finished. Its exit code is checked too, though
+/// CalculiX 2.20 exits with 0 even when it cannot open the input file.
+fn run_ccx(dir: &Path) -> String {
+    let out = Command::new("ccx")
+        .args(["-i", "job"])
+        .current_dir(dir)
+        .env("OMP_NUM_THREADS", "1")
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(out.status.success(), "ccx failed:\n{stdout}");
+    for bad in ["*WARNING", "*ERROR"] {
+        assert!(
+            !stdout.contains(bad),
+            "ccx: {bad} reading the deck:\n{stdout}"
+        );
+    }
+    assert!(
+        stdout.contains("Job finished"),
+        "ccx did not finish:\n{stdout}"
+    );
+    stdout
+}
+
+/// The rows of the `.dat` block whose title contains `title`: each line's last three numbers,
+/// up to the first line without numbers after them.
+fn dat_rows(dat: &str, title: &str) -> Vec<[f64; 3]> {
+    let mut rows = Vec::new();
+    let mut lines = dat.lines().skip_while(|l| !l.contains(title)).skip(1);
+    for line in lines.by_ref() {
+        let numbers: Vec<f64> = line
+            .split_whitespace()
+            .filter_map(|f| f.parse().ok())
+            .collect();
+        if numbers.len() >= 3 {
+            let n = numbers.len();
+            rows.push([numbers[n - 3], numbers[n - 2], numbers[n - 1]]);
+        } else if !rows.is_empty() {
+            break;
+        }
+    }
+    rows
+}
+
+/// The hemisphere example, 10 mm cells, 4 mm of stroke: its `formed-blank.inp`, included
+/// unchanged in a deck with an elastic material, the `left` edge clamped and 1 N a node on the
+/// `right` edge along z, runs to the end in CalculiX, and the reaction on the clamped edge is
+/// the load applied (17 nodes: 17 N), the displacements of every node in the `.frd` file.
+#[test]
+fn the_formed_blank_runs_in_calculix() {
+    if !ccx_available("the_formed_blank_runs_in_calculix") {
+        return;
+    }
+    let dir = scratch_dir("export_calculix", "formed");
+    let run = dir.join("run");
+    let _ = std::fs::remove_dir_all(&run);
+    run_ok(&[
+        "run",
+        "examples/hemisphere.toml",
+        "--set",
+        "blank.element_size=10",
+        "--set",
+        "process.stroke=4",
+        "--set",
+        "output.frames=1",
+        "--output",
+        run.to_str().unwrap(),
+    ]);
+    let deck = std::fs::read_to_string(run.join("formed-blank.inp")).unwrap();
+    let right = deck
+        .lines()
+        .skip_while(|l| !l.eq_ignore_ascii_case("*NSET, NSET=right"))
+        .skip(1)
+        .take_while(|l| !l.starts_with('*'))
+        .flat_map(|l| l.split(','))
+        .count();
+    assert_eq!(right, 17);
+    std::fs::write(dir.join("formed-blank.inp"), &deck).unwrap();
+    std::fs::write(
+        dir.join("job.inp"),
+        "*INCLUDE, INPUT=formed-blank.inp\n\
+         *MATERIAL, NAME=PREPREG\n*ELASTIC\n10000.0, 0.3\n\
+         *BOUNDARY\nleft, 1, 6\n\
+         *STEP\n*STATIC\n*CLOAD\nright, 3, 1.0\n\
+         *NODE PRINT, NSET=left, TOTALS=ONLY\nRF\n*NODE FILE\nU\n*END STEP\n",
+    )
+    .unwrap();
+    run_ccx(&dir);
+    let dat = std::fs::read_to_string(dir.join("job.dat")).unwrap();
+    let total = dat_rows(&dat, "total force");
+    assert_eq!(total.len(), 1, "{dat}");
+    let [fx, fy, fz] = total[0];
+    assert!(
+        (fz + right as f64).abs() < 1e-6 && fx.abs() < 1e-6 && fy.abs() < 1e-6,
+        "reaction {:?} for {right} N applied along z",
+        total[0]
+    );
+    let frd = std::fs::read_to_string(dir.join("job.frd")).unwrap();
+    assert!(frd.contains("DISP"), "no displacements in job.frd");
+}
+
+/// A flat 10 x 10 mm plate of two S3 elements written with a thickness of 0.5 mm and the warp
+/// along x, then along y, in an orthotropic material (E1 = 100 GPa, E2 = 1 GPa, no Poisson
+/// effect), clamped on its left edge and pulled by 10 N on each right node: CalculiX's
+/// stretch is F L / (E t W) with the E of the warp's direction and the written thickness,
+/// 4e-4 mm then 4e-2 mm. (CalculiX 2.20 applies only the default line of an orientation
+/// `*DISTRIBUTION` to every element: an export in that form would give 4e-4 mm both times.)
+#[test]
+fn calculix_takes_each_elements_orientation_and_thickness() {
+    if !ccx_available("calculix_takes_each_elements_orientation_and_thickness") {
+        return;
+    }
+    let mesh = rectangle(10.0, 10.0, 1, 1, DiagonalPattern::Right);
+    let n = mesh.triangles.len();
+    for (warp, modulus) in [(Vector3::x(), 100e3), (Vector3::y(), 1e3)] {
+        let dir = scratch_dir("export_calculix", &format!("plate-{modulus}"));
+        write_inp(
+            &dir.join("plate.inp"),
+            &mesh,
+            Some(&ElementOutput {
+                warp: vec![warp; n],
+                thickness: vec![0.5; n],
+            }),
+        )
+        .unwrap();
+        std::fs::write(
+            dir.join("job.inp"),
+            "*INCLUDE, INPUT=plate.inp\n\
+             *MATERIAL, NAME=PREPREG\n*ELASTIC, TYPE=ENGINEERING CONSTANTS\n\
+             100000.0, 1000.0, 1000.0, 0.0, 0.0, 0.0, 500.0, 500.0\n500.0, 0.0\n\
+             *BOUNDARY\nleft, 1, 6\n\
+             *STEP\n*STATIC\n*CLOAD\nright, 1, 10.0\n\
+             *NODE PRINT, NSET=right\nU\n*END STEP\n",
+        )
+        .unwrap();
+        run_ccx(&dir);
+        let dat = std::fs::read_to_string(dir.join("job.dat")).unwrap();
+        let u = dat_rows(&dat, "displacements");
+        assert_eq!(u.len(), 2, "{dat}");
+        let expected = 20.0 * 10.0 / (modulus * 0.5 * 10.0);
+        for [ux, _, _] in u {
+            assert!(
+                (ux - expected).abs() < 1e-6 * expected,
+                "warp {warp:?}: stretch {ux} mm, expected {expected} mm"
+            );
+        }
+    }
+}

@@ -1,0 +1,273 @@
+//! Every ParaView file the product writes, read by VTK itself (`tests/read_vtk.py`, the
+//! `vtk` Python package, whose XML reader is ParaView's): the frames of a forming run and
+//! their `.pvd`, the formed blank, the frames of a virtual test, and the drape preview. Point
+//! and cell counts, array names (the same whatever the card's stack), component names, no
+//! NaN, the meanings of the `contact_status` codes, the frames' process times, and the drape
+//! preview's cells sharing their points.
+//!
+//! Without Python and VTK this test fails when `CI` is set (CI installs them: `.ci/run`) and
+//! is skipped, with a printed line, otherwise.
+
+mod common;
+
+use common::{repo_path, run_ok, scratch_dir};
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::process::Command;
+
+/// What VTK read from one `.vtu`.
+#[derive(Debug, Default)]
+struct Grid {
+    points: usize,
+    cells: usize,
+    types: String,
+    shared_points: usize,
+    /// "point NAME" or "cell NAME" -> (components, component names, non-finite values)
+    arrays: BTreeMap<String, (usize, String, usize)>,
+    /// field-data string arrays: name -> values joined by '|'
+    fields: BTreeMap<String, String>,
+}
+
+/// What VTK read from the files: the grids by file name and the `.pvd` times by file name.
+#[derive(Debug, Default)]
+struct Read {
+    grids: BTreeMap<String, Grid>,
+    times: BTreeMap<String, Vec<f64>>,
+}
+
+/// Whether python3 with VTK can run the reader (with no files, it only imports VTK); `false`
+/// (skip) only outside CI.
+fn vtk_available(dir: &Path) -> bool {
+    let found = Command::new("python3")
+        .arg(repo_path("tests/read_vtk.py"))
+        .current_dir(dir)
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !found {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "CI is set but python3 with VTK (pip install vtk) is not available"
+        );
+        println!("paraview_files: skipped, python3 with the vtk package is not installed");
+    }
+    found
+}
+
+/// Runs the reader in `dir` (where VTK's error log goes).
+fn read_with_vtk(dir: &Path, files: &[&Path]) -> Read {
+    let out = Command::new("python3")
+        .arg(repo_path("tests/read_vtk.py"))
+        .args(files)
+        .current_dir(dir)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "VTK could not read the files: {}\n{stdout}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    parse(&stdout)
+}
+
+fn parse(text: &str) -> Read {
+    let mut read = Read::default();
+    let mut current = String::new();
+    for line in text.lines() {
+        let words: Vec<&str> = line.split(' ').collect();
+        match words[0] {
+            "pvd" => {
+                let times = words[3..].iter().map(|t| t.parse().unwrap()).collect();
+                read.times.insert(words[1].to_string(), times);
+            }
+            "vtu" => {
+                current = words[1].to_string();
+                read.grids.insert(
+                    current.clone(),
+                    Grid {
+                        points: words[3].parse().unwrap(),
+                        cells: words[5].parse().unwrap(),
+                        types: words[7].to_string(),
+                        shared_points: words[9].parse().unwrap(),
+                        ..Grid::default()
+                    },
+                );
+            }
+            "point" | "cell" => {
+                let grid = read.grids.get_mut(&current).unwrap();
+                grid.arrays.insert(
+                    format!("{} {}", words[0], words[1]),
+                    (
+                        words[3].parse().unwrap(),
+                        words[5].to_string(),
+                        words[7].parse().unwrap(),
+                    ),
+                );
+            }
+            "field" => {
+                let grid = read.grids.get_mut(&current).unwrap();
+                let (_, values) = line.split_once(" values ").unwrap();
+                grid.fields.insert(words[1].to_string(), values.to_string());
+            }
+            other => panic!("unexpected reader line '{other}': {line}"),
+        }
+    }
+    read
+}
+
+/// The arrays of a sheet frame: name -> component names ("-" for scalars).
+fn sheet_arrays(contact: bool, stresses: &[&str]) -> BTreeMap<String, String> {
+    let mut arrays: BTreeMap<String, String> = [
+        ("point displacement", "x,y,z"),
+        ("point velocity", "x,y,z"),
+        ("point reaction", "x,y,z"),
+        ("cell shear_angle_deg", "-"),
+        ("cell warp", "x,y,z"),
+        ("cell weft", "x,y,z"),
+        ("cell thickness", "-"),
+        ("cell membrane_force", "xx,yy,xy"),
+    ]
+    .iter()
+    .map(|(n, c)| (n.to_string(), c.to_string()))
+    .collect();
+    if contact {
+        for name in [
+            "contact_pressure",
+            "contact_status",
+            "gap_punch",
+            "gap_die",
+            "gap_blank_holder",
+        ] {
+            arrays.insert(format!("point {name}"), "-".into());
+        }
+    }
+    for stress in stresses {
+        arrays.insert(format!("cell {stress}"), "xx,yy,xy".into());
+    }
+    arrays
+}
+
+fn assert_grid(name: &str, grid: &Grid, counts: (usize, usize), arrays: &BTreeMap<String, String>) {
+    assert_eq!((grid.points, grid.cells), counts, "{name}");
+    assert_eq!(grid.types, "5", "{name}: not all triangles");
+    let got: BTreeMap<String, String> = grid
+        .arrays
+        .iter()
+        .map(|(n, (_, c, _))| (n.clone(), c.clone()))
+        .collect();
+    assert_eq!(&got, arrays, "{name}: arrays and their component names");
+    for (array, (components, _, nan)) in &grid.arrays {
+        assert_eq!(*nan, 0, "{name}: {array} has non-finite values");
+        let expected = if arrays[array] == "-" { 1 } else { 3 };
+        assert_eq!(*components, expected, "{name}: {array}");
+    }
+}
+
+#[test]
+fn every_paraview_file_reads_in_vtk_as_written() {
+    let dir = scratch_dir("paraview_files", "all");
+    if !vtk_available(&dir) {
+        return;
+    }
+    for sub in ["run", "bias", "drape"] {
+        let _ = std::fs::remove_dir_all(dir.join(sub));
+    }
+    let (run, bias, drape) = (dir.join("run"), dir.join("bias"), dir.join("drape"));
+    // the hemisphere example on 10 mm cells, 4 mm of stroke at 10 mm/s, time scaling 10
+    run_ok(&[
+        "run",
+        "examples/hemisphere.toml",
+        "--set",
+        "blank.element_size=10",
+        "--set",
+        "process.stroke=4",
+        "--set",
+        "output.frames=2",
+        "--set",
+        "output.history_points=8",
+        "--output",
+        run.to_str().unwrap(),
+    ]);
+    // a dry fabric card (one fabric layer): the same stress array name as the prepreg's
+    run_ok(&[
+        "test",
+        "bias-extension",
+        "--card",
+        "tests/data/stiff-yarn-fabric.toml",
+        "--element-size",
+        "37.5",
+        "--end-displacement",
+        "20",
+        "--speed",
+        "200",
+        "--time-scaling",
+        "1",
+        "--target-step",
+        "0",
+        "--frames",
+        "3",
+        "--history-points",
+        "12",
+        "--threads",
+        "1",
+        "--output",
+        bias.to_str().unwrap(),
+    ]);
+    run_ok(&[
+        "drape",
+        "examples/hemisphere.toml",
+        "--output",
+        drape.to_str().unwrap(),
+    ]);
+    let files = [
+        run.join("forming.pvd"),
+        run.join("formed-blank.vtu"),
+        bias.join("bias-extension.pvd"),
+        drape.join("drape.vtu"),
+    ];
+    let paths: Vec<&Path> = files.iter().map(|f| f.as_path()).collect();
+    let read = read_with_vtk(&dir, &paths);
+
+    // forming: 17 x 17 nodes, 2 x 16 x 16 triangles, frames at 0, half and all the stroke in
+    // process time (4 mm at 10 mm/s and a smooth start: 0.41 s; the solver's time is a tenth)
+    let times = &read.times["forming.pvd"];
+    assert_eq!(times.len(), 3, "{times:?}");
+    assert!(times[0] == 0.0 && times[1] < times[2], "{times:?}");
+    assert!((0.40..0.42).contains(&times[2]), "{times:?}");
+    let forming = sheet_arrays(true, &["stress_matrix", "stress_fabric"]);
+    for name in [
+        "forming_0000.vtu",
+        "forming_0001.vtu",
+        "forming_0002.vtu",
+        "formed-blank.vtu",
+    ] {
+        let grid = &read.grids[name];
+        assert_grid(name, grid, (289, 512), &forming);
+        assert_eq!(
+            grid.fields["contact_status_codes"], "0 free|1 punch|2 die|3 blank holder",
+            "{name}"
+        );
+    }
+
+    // virtual test: no tools, no contact fields, the fabric's stress under the same name
+    assert_eq!(read.times["bias-extension.pvd"].len(), 4);
+    let test = sheet_arrays(false, &["stress_fabric"]);
+    for k in 0..4 {
+        let name = format!("bias-extension_{k:04}.vtu");
+        let grid = &read.grids[&name];
+        assert_eq!(grid.points, grid.shared_points, "{name}");
+        assert_grid(&name, grid, (grid.points, grid.cells), &test);
+        assert!(grid.fields.is_empty(), "{name}: {:?}", grid.fields);
+    }
+
+    // drape preview: one point per node of the net, shared by the cells around it (a point
+    // per corner of each cell would give two points per triangle, none shared)
+    let net = &read.grids["drape.vtu"];
+    let shear: BTreeMap<String, String> = [("cell shear_angle_deg".to_string(), "-".to_string())]
+        .into_iter()
+        .collect();
+    assert_grid("drape.vtu", net, (net.points, net.cells), &shear);
+    assert!(net.cells > 100, "{net:?}");
+    assert!(net.points < net.cells, "{net:?}");
+    assert!(2 * net.shared_points > net.points, "{net:?}");
+}
