@@ -2,6 +2,8 @@
 
 use crate::experiment::sheet_test::Progress;
 use crate::forming::Scenario;
+use crate::solver::checks::CheckReport;
+use crate::solver::estimate::{format_bytes, peak_memory, RunEstimate};
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
@@ -87,5 +89,36 @@ impl ScenarioArgs {
             .clone()
             .unwrap_or_else(|| scenario.output.folder.clone());
         Ok((scenario, dir))
+    }
+}
+
+/// [`print_table`] with the memory (peak against the estimate) and the checks section after
+/// `rows`; each check that is not OK is also a warning line on standard error.
+pub fn print_checked_table(
+    rows: &[(&str, String)],
+    checks: &CheckReport,
+    estimate: &RunEstimate,
+    files: &[PathBuf],
+) {
+    let mut all: Vec<(String, String)> = rows
+        .iter()
+        .map(|(name, value)| (name.to_string(), value.clone()))
+        .collect();
+    let peak = peak_memory().map_or("unknown".into(), format_bytes);
+    all.push((
+        "memory".into(),
+        format!(
+            "{peak} peak (estimated {})",
+            format_bytes(estimate.memory)
+        ),
+    ));
+    all.push(("checks".into(), String::new()));
+    for (name, value) in checks.rows() {
+        all.push((format!("  {name}"), value));
+    }
+    let borrowed: Vec<(&str, String)> = all.iter().map(|(n, v)| (n.as_str(), v.clone())).collect();
+    print_table(&borrowed, files);
+    for line in checks.warnings() {
+        eprintln!("warning: {}: {}: {}", line.name, line.status, line.figure);
     }
 }

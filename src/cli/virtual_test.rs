@@ -1,11 +1,11 @@
 //! `thermostamp test ...`: the virtual material tests, with CSV, ParaView and PNG output, a
 //! progress bar and a summary table.
 
-use super::shared::{print_table, with_threads, Bar};
+use super::shared::{print_checked_table, with_threads, Bar};
 use crate::experiment::bias_extension::{BiasExtension, BiasRow};
 use crate::experiment::picture_frame::{PictureFrame, PictureFrameRow};
 use crate::experiment::sheet_test::{
-    FrameOutput, Progress, Record, RunSummary, SheetTest, TestProcess, TestRun,
+    FrameOutput, Progress, Record, SheetTest, TestProcess, TestRun,
     QUASI_STATIC_SPEED_RATIO,
 };
 use crate::experiment::uniaxial::{UniaxialRow, UniaxialTension};
@@ -14,6 +14,7 @@ use crate::io::vtk::PvdSeries;
 use crate::io::write_csv;
 use crate::material::MaterialCard;
 use crate::mesh::DiagonalPattern;
+use crate::solver::estimate::{self, RunEstimate};
 use anyhow::Context;
 use std::path::{Path, PathBuf};
 
@@ -185,7 +186,8 @@ fn bias_extension(args: &BiasArgs) -> anyhow::Result<()> {
     test.length = args.length;
     c.apply(&mut test.process);
     let names = ("bias extension", "bias-extension");
-    sheet_test(c, &card, names, &test, bias_report)
+    let specimen = (test.width, test.length);
+    sheet_test(c, &card, (names, specimen), &test, bias_report)
 }
 
 fn uniaxial(args: &UniaxialArgs) -> anyhow::Result<()> {
@@ -197,7 +199,8 @@ fn uniaxial(args: &UniaxialArgs) -> anyhow::Result<()> {
     test.ply_angle = args.ply_angle;
     c.apply(&mut test.process);
     let names = ("uniaxial test", "uniaxial");
-    sheet_test(c, &card, names, &test, uniaxial_report)
+    let specimen = (test.width, test.length);
+    sheet_test(c, &card, (names, specimen), &test, uniaxial_report)
 }
 
 fn picture_frame(args: &PictureFrameArgs) -> anyhow::Result<()> {
@@ -207,27 +210,61 @@ fn picture_frame(args: &PictureFrameArgs) -> anyhow::Result<()> {
     test.side = dimension("side", args.side)?;
     c.apply(&mut test.process);
     let names = ("picture frame", "picture-frame");
-    sheet_test(c, &card, names, &test, picture_frame_report)
+    let specimen = (test.side, test.side);
+    sheet_test(c, &card, (names, specimen), &test, picture_frame_report)
 }
 
 /// Validates and runs a [`SheetTest`] with the shared outputs; `names` as for
-/// [`run_and_report`], `report` turns its rows into columns and plots.
+/// [`run_and_report`], `specimen` its width and length (mm), `report` turns its rows into
+/// columns and plots.
 fn sheet_test<T: SheetTest>(
     c: &CommonArgs,
     card: &MaterialCard,
-    names: (&str, &str),
+    (names, specimen): ((&str, &str), (f64, f64)),
     test: &T,
     report: fn(&[T::Row]) -> TestReport,
 ) -> anyhow::Result<()> {
-    test.validate()
-        .map_err(|e| anyhow::anyhow!("{}: {e}", names.0))?;
-    warn_if_dynamic(test, card).map_err(|e| anyhow::anyhow!("{}: {e}", names.0))?;
+    let refuse = |e: String| anyhow::anyhow!("{}: {e}", names.0);
+    test.validate().map_err(refuse)?;
+    check_specimen_memory(test.process(), specimen, card).map_err(refuse)?;
+    warn_if_dynamic(test, card).map_err(refuse)?;
+    let estimate = test
+        .estimate(&card.laminate, card.density)
+        .map_err(refuse)?;
+    estimate::check_steps(
+        &estimate,
+        (
+            "--element-size or --target-step (the step)",
+            "--speed or --time-scaling",
+            "--target-step",
+        ),
+    )
+    .map_err(refuse)?;
+    eprintln!("{}", estimate.describe());
     let p = test.process();
     let shape = (test.settings().end_time, p.time_scaling);
-    run_and_report(c, names, shape, p.history_points, |frames, bar| {
+    run_and_report(c, (names, &estimate), shape, p.history_points, |frames, bar| {
         let result = test.run(&card.laminate, card.density, frames, Some(bar))?;
         Ok((result.run, report(&result.rows)))
     })
+}
+
+/// Refuses a specimen whose mesh would not fit the memory the machine has free, from the
+/// element size before the mesh is made.
+fn check_specimen_memory(
+    p: &TestProcess,
+    (width, length): (f64, f64),
+    card: &MaterialCard,
+) -> Result<(), String> {
+    let cells = |side: f64| (side / p.element_size).round().max(1.0);
+    let (nx, ny) = (cells(width), cells(length));
+    let (elements, nodes) = match p.pattern {
+        DiagonalPattern::Crossed => (4.0 * nx * ny, (nx + 1.0) * (ny + 1.0) + nx * ny),
+        _ => (2.0 * nx * ny, (nx + 1.0) * (ny + 1.0)),
+    };
+    let layers = card.laminate.initial_state().thickness_stretch.len();
+    let (per_element, per_node, _) = estimate::item_bytes(layers, false, 0);
+    estimate::check_memory(elements * per_element + nodes * per_node, "--element-size")
 }
 
 /// A warning on standard error when the crosshead is too fast for a quasi-static test.
@@ -252,7 +289,7 @@ fn warn_if_dynamic<T: SheetTest>(test: &T, card: &MaterialCard) -> Result<(), St
 /// its solver error.
 fn run_and_report(
     c: &CommonArgs,
-    (label, name): (&str, &str),
+    ((label, name), estimate): ((&str, &str), &RunEstimate),
     (end_time, time_scaling): (f64, f64),
     history_points: usize,
     run: impl FnOnce(Option<FrameOutput>, &mut dyn Progress) -> Result<(TestRun, TestReport), String>,
@@ -270,7 +307,7 @@ fn run_and_report(
     if wrote_frames {
         files.push(c.output.join(format!("{name}.pvd")));
     }
-    print_summary(&run.summary, time_scaling, &files);
+    print_summary(&run, time_scaling, estimate, &files);
     run.outcome.map(|_| ()).map_err(anyhow::Error::from)
 }
 
@@ -466,7 +503,8 @@ fn uniaxial_report(rows: &[UniaxialRow]) -> TestReport {
     }
 }
 
-fn print_summary(s: &RunSummary, time_scaling: f64, files: &[PathBuf]) {
+fn print_summary(run: &TestRun, time_scaling: f64, estimate: &RunEstimate, files: &[PathBuf]) {
+    let s = &run.summary;
     let rows = [
         ("steps", format!("{}", s.steps)),
         ("elements", format!("{}", s.elements)),
@@ -509,7 +547,7 @@ fn print_summary(s: &RunSummary, time_scaling: f64, files: &[PathBuf]) {
             format!("{:.3e}", s.element_steps_per_second()),
         ),
     ];
-    print_table(&rows, files);
+    print_checked_table(&rows, &run.checks, estimate, files);
 }
 
 /// `text()` for a figure the run got to, a dash for one a stopped run did not.

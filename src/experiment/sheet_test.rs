@@ -5,8 +5,10 @@ use crate::io::sheet_frame::sheet_frame;
 use crate::io::vtk::{PvdSeries, VtuFrame};
 use crate::material::Laminate;
 use crate::mesh::{rectangle, DiagonalPattern};
+use crate::solver::checks::{self, CheckReport, CheckSettings};
+use crate::solver::estimate::{self, RunEstimate};
 use crate::solver::{
-    self, Constraint, Energies, Model, Motion, Observer, SolverError, SolverSettings, State,
+    Constraint, Energies, Model, Motion, Observer, SolverError, SolverSettings, State,
 };
 use nalgebra::Vector3;
 use std::sync::Arc;
@@ -205,6 +207,13 @@ pub trait SheetTest {
         Ok(self.process().crosshead().speed / (g / rho).sqrt())
     }
 
+    /// Steps, memory and wall time of the run on `laminate` (of `density`), from the model
+    /// built and its step at rest.
+    fn estimate(&self, laminate: &Laminate, density: f64) -> Result<RunEstimate, String> {
+        let model = self.model(laminate, density)?;
+        estimate::estimate(&model, &self.settings())
+    }
+
     /// Runs the test on `laminate` (of `density`); the records of the smooth start (two ramp
     /// times) do not count for the energy figures of the summary.
     fn run(
@@ -282,6 +291,8 @@ pub struct TestRun {
     pub summary: RunSummary,
     /// The final state, or why the run stopped (the records and frames so far are kept).
     pub outcome: Result<State, SolverError>,
+    /// The run-time checks (`solver::checks`).
+    pub checks: CheckReport,
 }
 
 /// Where frames go and how often.
@@ -370,7 +381,17 @@ pub fn run_sheet_test(
         progress,
         steps: 0,
     };
-    let outcome = solver::run(model, settings, &mut recorder);
+    let (outcome, checks) = match checks::force_bound(model) {
+        Ok(force_bound) => {
+            let check = CheckSettings {
+                settle_time,
+                force_bound,
+                dynamic_advice: "lower --speed or --time-scaling (or --target-step)",
+            };
+            checks::run(model, settings, check, &mut recorder)
+        }
+        Err(e) => (Err(SolverError::Settings(e)), CheckReport::default()),
+    };
     let wall_seconds = start.elapsed().as_secs_f64();
     let settled = recorder
         .records
@@ -404,6 +425,7 @@ pub fn run_sheet_test(
         },
         records: recorder.records,
         outcome,
+        checks,
     }
 }
 

@@ -111,6 +111,9 @@ pub enum SolverError {
     Settings(String),
     #[error("writing results at t = {time:.6e} s: {source:#}")]
     Output { time: f64, source: anyhow::Error },
+    /// A run-time check ([`super::checks`]) found the result meaningless.
+    #[error(transparent)]
+    Check(super::checks::CheckStop),
 }
 
 /// What the element loop returns per element.
