@@ -6,7 +6,7 @@ use crate::experiment::bias_extension::{BiasExtension, BiasRow};
 use crate::experiment::picture_frame::{PictureFrame, PictureFrameRow};
 use crate::experiment::sheet_test::{
     FrameOutput, Progress, Record, SheetTest, TestProcess, TestRun,
-    QUASI_STATIC_SPEED_RATIO,
+    quasi_static_time_scaling, QUASI_STATIC_SPEED_RATIO,
 };
 use crate::experiment::uniaxial::{UniaxialRow, UniaxialTension};
 use crate::io::plot::{write_png, LinePlot, LineStyle, Series};
@@ -184,10 +184,11 @@ fn bias_extension(args: &BiasArgs) -> anyhow::Result<()> {
     let mut test = BiasExtension::benchmark(temperature);
     test.width = args.width;
     test.length = args.length;
+    test.process.element_size = test.default_element_size();
     c.apply(&mut test.process);
     let names = ("bias extension", "bias-extension");
     let specimen = (test.width, test.length);
-    sheet_test(c, &card, (names, specimen), &test, bias_report)
+    sheet_test(c, &card, (names, specimen), &mut test, bias_report)
 }
 
 fn uniaxial(args: &UniaxialArgs) -> anyhow::Result<()> {
@@ -197,10 +198,11 @@ fn uniaxial(args: &UniaxialArgs) -> anyhow::Result<()> {
     test.width = dimension("width", args.width)?;
     test.length = dimension("length", args.length)?;
     test.ply_angle = args.ply_angle;
+    test.process.element_size = test.default_element_size();
     c.apply(&mut test.process);
     let names = ("uniaxial test", "uniaxial");
     let specimen = (test.width, test.length);
-    sheet_test(c, &card, (names, specimen), &test, uniaxial_report)
+    sheet_test(c, &card, (names, specimen), &mut test, uniaxial_report)
 }
 
 fn picture_frame(args: &PictureFrameArgs) -> anyhow::Result<()> {
@@ -208,10 +210,11 @@ fn picture_frame(args: &PictureFrameArgs) -> anyhow::Result<()> {
     let (card, temperature) = card_and_temperature(c)?;
     let mut test = PictureFrame::standard(temperature);
     test.side = dimension("side", args.side)?;
+    test.process.element_size = test.default_element_size();
     c.apply(&mut test.process);
     let names = ("picture frame", "picture-frame");
     let specimen = (test.side, test.side);
-    sheet_test(c, &card, (names, specimen), &test, picture_frame_report)
+    sheet_test(c, &card, (names, specimen), &mut test, picture_frame_report)
 }
 
 /// Validates and runs a [`SheetTest`] with the shared outputs; `names` as for
@@ -221,12 +224,17 @@ fn sheet_test<T: SheetTest>(
     c: &CommonArgs,
     card: &MaterialCard,
     (names, specimen): ((&str, &str), (f64, f64)),
-    test: &T,
+    test: &mut T,
     report: fn(&[T::Row]) -> TestReport,
 ) -> anyhow::Result<()> {
     let refuse = |e: String| anyhow::anyhow!("{}: {e}", names.0);
     test.validate().map_err(refuse)?;
     check_specimen_memory(test.process(), specimen, card).map_err(refuse)?;
+    let chosen = choose_defaults(c, test, specimen, card).map_err(refuse)?;
+    for line in &chosen {
+        eprintln!("note: {line}");
+    }
+    let test = &*test;
     warn_if_dynamic(test, card).map_err(refuse)?;
     let estimate = test
         .estimate(&card.laminate, card.density)
@@ -243,10 +251,45 @@ fn sheet_test<T: SheetTest>(
     eprintln!("{}", estimate.describe());
     let p = test.process();
     let shape = (test.settings().end_time, p.time_scaling);
-    run_and_report(c, (names, &estimate), shape, p.history_points, |frames, bar| {
+    run_and_report(c, (names, &estimate, &chosen), shape, p.history_points, |frames, bar| {
         let result = test.run(&card.laminate, card.density, frames, Some(bar))?;
         Ok((result.run, report(&result.rows)))
     })
+}
+
+/// The defaults that depend on the specimen and the card, for what the options leave open: the
+/// element size (set relative to the specimen by the test, reported here) and, with neither
+/// --speed nor --time-scaling given, a time scaling low enough for a quasi-static test
+/// ([`quasi_static_time_scaling`]). One line each of what was chosen.
+fn choose_defaults<T: SheetTest>(
+    c: &CommonArgs,
+    test: &mut T,
+    (width, length): (f64, f64),
+    card: &MaterialCard,
+) -> Result<Vec<String>, String> {
+    let mut chosen = Vec::new();
+    if c.element_size.is_none() {
+        let h = test.process().element_size;
+        chosen.push(format!(
+            "element size {h:.4} mm ({:.0} x {:.0} cells on the {width} x {length} mm specimen; \
+             --element-size to change)",
+            width / h,
+            length / h
+        ));
+    }
+    if c.speed.is_none() && c.time_scaling.is_none() {
+        let ratio = test.speed_to_shear_wave(&card.laminate, card.density)?;
+        let scaling = test.process().time_scaling;
+        if let Some(lower) = quasi_static_time_scaling(ratio, scaling) {
+            test.process_mut().time_scaling = lower;
+            chosen.push(format!(
+                "time scaling {lower:.4} instead of {scaling}: the crosshead at {:.2} % of the \
+                 card's shear wave speed, quasi-static (--time-scaling to change)",
+                100.0 * ratio * lower / scaling
+            ));
+        }
+    }
+    Ok(chosen)
 }
 
 /// Refuses a specimen whose mesh would not fit the memory the machine has free, from the
@@ -289,7 +332,7 @@ fn warn_if_dynamic<T: SheetTest>(test: &T, card: &MaterialCard) -> Result<(), St
 /// its solver error.
 fn run_and_report(
     c: &CommonArgs,
-    ((label, name), estimate): ((&str, &str), &RunEstimate),
+    ((label, name), estimate, chosen): ((&str, &str), &RunEstimate, &[String]),
     (end_time, time_scaling): (f64, f64),
     history_points: usize,
     run: impl FnOnce(Option<FrameOutput>, &mut dyn Progress) -> Result<(TestRun, TestReport), String>,
@@ -307,7 +350,7 @@ fn run_and_report(
     if wrote_frames {
         files.push(c.output.join(format!("{name}.pvd")));
     }
-    print_summary(&run, time_scaling, estimate, &files);
+    print_summary(&run, (time_scaling, chosen), estimate, &files);
     run.outcome.map(|_| ()).map_err(anyhow::Error::from)
 }
 
@@ -503,9 +546,20 @@ fn uniaxial_report(rows: &[UniaxialRow]) -> TestReport {
     }
 }
 
-fn print_summary(run: &TestRun, time_scaling: f64, estimate: &RunEstimate, files: &[PathBuf]) {
+fn print_summary(
+    run: &TestRun,
+    (time_scaling, chosen): (f64, &[String]),
+    estimate: &RunEstimate,
+    files: &[PathBuf],
+) {
     let s = &run.summary;
+    let defaults = if chosen.is_empty() {
+        "none (all given)".to_string()
+    } else {
+        chosen.join("; ")
+    };
     let rows = [
+        ("defaults chosen", defaults),
         ("steps", format!("{}", s.steps)),
         ("elements", format!("{}", s.elements)),
         (

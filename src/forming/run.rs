@@ -141,6 +141,11 @@ fn check_settings(forming: &FormingModel) -> Result<CheckSettings, String> {
     Ok(CheckSettings {
         settle_time: 2.0 * forming.punch.ramp_time,
         force_bound: checks::force_bound(&forming.model)?,
+        loaded_work: checks::carried_kinetic_energy(
+            &forming.model,
+            &forming.settings,
+            forming.punch.speed,
+        )?,
         dynamic_advice: "lower process.punch_speed, process.time_scaling or \
                          process.target_time_step",
     })

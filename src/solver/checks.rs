@@ -116,6 +116,9 @@ pub struct CheckSettings {
     pub settle_time: f64,
     /// Largest physical force of the run (N), [`force_bound`].
     pub force_bound: f64,
+    /// Internal work from which the kinetic energy may stop the run (N·mm),
+    /// [`carried_kinetic_energy`].
+    pub loaded_work: f64,
     /// What to change when the run is too dynamic, for the messages ("lower --speed ...").
     pub dynamic_advice: &'static str,
 }
@@ -162,6 +165,22 @@ fn rest_wave_modulus(model: &Model) -> Result<f64, String> {
             .map_err(|err| err.to_string())?;
         Ok(most.max(modulus))
     })
+}
+
+/// The kinetic energy of the whole sheet carried at the tool's (or crosshead's) `speed`
+/// (simulated mm/s), `M v^2 / 2` with the mass after mass scaling (N·mm). Until the sheet has
+/// taken that much internal work its kinetic energy is of the size of the internal work in any
+/// run (a punch lifting a blank carries it along), so the kinetic energy stops a run only
+/// after it.
+pub fn carried_kinetic_energy(
+    model: &Model,
+    settings: &SolverSettings,
+    speed: f64,
+) -> Result<f64, String> {
+    let (_, added_ratio) = super::estimate::rest_step(model, settings)?;
+    let area: f64 = model.elements.iter().map(|e| e.area).sum();
+    let mass = model.density * model.laminate.reference_thickness() * area * (1.0 + added_ratio);
+    Ok(0.5 * mass * speed * speed)
 }
 
 /// Runs the solver with the checks watching every record; returns the outcome and the report.
@@ -276,7 +295,8 @@ impl Watch {
             ));
         }
         let ratio = kinetic_ratio(e);
-        self.kinetic_run = if settled && ratio > KINETIC_STOP {
+        let loaded = settled && e.internal_work >= self.settings.loaded_work;
+        self.kinetic_run = if loaded && ratio > KINETIC_STOP {
             self.kinetic_run + 1
         } else {
             0
