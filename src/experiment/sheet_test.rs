@@ -568,6 +568,16 @@ pub fn reaction_along(state: &State, nodes: &[usize], direction: &Vector3<f64>) 
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn the_default_time_scaling_is_lowered_only_for_a_fast_crosshead() {
+        use super::{quasi_static_time_scaling, QUASI_STATIC_DEFAULT_RATIO};
+        assert_eq!(quasi_static_time_scaling(0.009, 300.0), None);
+        let lower = quasi_static_time_scaling(0.014, 300.0).unwrap();
+        assert!((lower * 0.014 / 300.0 - QUASI_STATIC_DEFAULT_RATIO).abs() < 1e-12);
+        // never below 1: a crosshead too fast even unscaled keeps its warning
+        assert_eq!(quasi_static_time_scaling(10.0, 300.0), Some(1.0));
+    }
+
     use super::*;
 
     #[test]

@@ -464,3 +464,69 @@ fn tunnelled_nodes(model: &Model, state: &State) -> usize {
         })
         .count()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn watch(records: &[(f64, f64, f64)]) -> Watch {
+        let settings = CheckSettings {
+            settle_time: 0.1,
+            force_bound: 1e6,
+            loaded_work: 0.0,
+            dynamic_advice: "",
+        };
+        let mut w = Watch::new(settings, 10);
+        w.records = records
+            .iter()
+            .map(|&(time, kinetic, internal_work)| {
+                let energies = Energies {
+                    kinetic,
+                    internal_work,
+                    external_work: kinetic + internal_work,
+                    ..Energies::default()
+                };
+                (time, energies)
+            })
+            .collect();
+        w
+    }
+
+    fn status(report: &CheckReport, name: &str) -> CheckStatus {
+        report.lines.iter().find(|l| l.name == name).unwrap().status
+    }
+
+    #[test]
+    fn kinetic_energy_counts_only_once_loaded() {
+        // the start (before the settle time) and the records under 5 % of the final work are
+        // left out: their ratios are those of a blank carried along
+        let quiet = watch(&[(0.05, 5.0, 1.0), (0.2, 0.4, 2.0), (0.5, 0.3, 10.0), (1.0, 1.0, 100.0)]);
+        let report = quiet.report(false);
+        assert_eq!(status(&report, KINETIC), CheckStatus::Ok);
+        assert!(report.lines[0].figure.starts_with("3.00 %"), "{:?}", report.lines[0]);
+        assert_eq!(report.lines.len(), 4, "no tool line without tools");
+        let dynamic = watch(&[(0.5, 8.0, 10.0), (1.0, 1.0, 100.0)]);
+        let report = dynamic.report(true);
+        assert_eq!(status(&report, KINETIC), CheckStatus::Warning);
+        assert_eq!(report.warnings().count(), 1);
+        assert_eq!(report.rows().len(), 5);
+    }
+
+    #[test]
+    fn a_stop_is_reported_as_stopped() {
+        let mut w = watch(&[(0.5, 8.0, 10.0)]);
+        w.stop = Some(FORCES);
+        let report = w.report(false);
+        assert_eq!(status(&report, FORCES), CheckStatus::Stopped);
+        assert!(report.rows().iter().any(|(n, v)| *n == FORCES && v.starts_with("STOPPED")));
+    }
+
+    #[test]
+    fn the_kinetic_ratio_is_zero_before_any_internal_work() {
+        let e = Energies {
+            kinetic: 1.0,
+            ..Energies::default()
+        };
+        assert_eq!(kinetic_ratio(&e), 0.0);
+    }
+}
