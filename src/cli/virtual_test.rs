@@ -586,13 +586,6 @@ fn print_summary(
             format!("{:.3} % of external work", 100.0 * s.worst_balance_error),
         ),
         (
-            "kinetic / internal energy",
-            format!(
-                "{:.3} % at most after the start",
-                100.0 * s.worst_kinetic_ratio
-            ),
-        ),
-        (
             "wall time",
             format!("{:.2} s on {} threads", s.wall_seconds, s.threads),
         ),
