@@ -45,7 +45,11 @@ fn assert_refused(code: Option<i32>, stderr: &str, names: &[&str]) {
 #[test]
 fn a_punch_that_would_pass_through_the_blank_is_refused() {
     let (code, stderr) = hemisphere_with("refuse-fast", &["process.punch_speed=100000"]);
-    assert_refused(code, &stderr, &["process.punch_speed", "per step", "pass through"]);
+    assert_refused(
+        code,
+        &stderr,
+        &["process.punch_speed", "per step", "pass through"],
+    );
 }
 
 /// 2000 mm/s: 0.09 mm per step, under the tunnelling limit, but the 30 mm stroke in 342

@@ -107,10 +107,7 @@ pub fn print_checked_table(
     let peak = peak_memory().map_or("unknown".into(), format_bytes);
     all.push((
         "memory".into(),
-        format!(
-            "{peak} peak (estimated {})",
-            format_bytes(estimate.memory)
-        ),
+        format!("{peak} peak (estimated {})", format_bytes(estimate.memory)),
     ));
     all.push(("checks".into(), String::new()));
     for (name, value) in checks.rows() {

@@ -5,8 +5,8 @@ use super::shared::{print_checked_table, with_threads, Bar};
 use crate::experiment::bias_extension::{BiasExtension, BiasRow};
 use crate::experiment::picture_frame::{PictureFrame, PictureFrameRow};
 use crate::experiment::sheet_test::{
-    FrameOutput, Progress, Record, SheetTest, TestProcess, TestRun,
-    quasi_static_time_scaling, QUASI_STATIC_SPEED_RATIO,
+    quasi_static_time_scaling, FrameOutput, Progress, Record, SheetTest, TestProcess, TestRun,
+    QUASI_STATIC_SPEED_RATIO,
 };
 use crate::experiment::uniaxial::{UniaxialRow, UniaxialTension};
 use crate::io::plot::{write_png, LinePlot, LineStyle, Series};
@@ -251,10 +251,16 @@ fn sheet_test<T: SheetTest>(
     eprintln!("{}", estimate.describe());
     let p = test.process();
     let shape = (test.settings().end_time, p.time_scaling);
-    run_and_report(c, (names, &estimate, &chosen), shape, p.history_points, |frames, bar| {
-        let result = test.run(&card.laminate, card.density, frames, Some(bar))?;
-        Ok((result.run, report(&result.rows)))
-    })
+    run_and_report(
+        c,
+        (names, &estimate, &chosen),
+        shape,
+        p.history_points,
+        |frames, bar| {
+            let result = test.run(&card.laminate, card.density, frames, Some(bar))?;
+            Ok((result.run, report(&result.rows)))
+        },
+    )
 }
 
 /// The defaults that depend on the specimen and the card, for what the options leave open: the

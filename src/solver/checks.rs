@@ -346,7 +346,10 @@ impl Watch {
                 && e.internal_work > 0.0
                 && e.internal_work >= LOADED_FRACTION * final_work
         });
-        let kinetic = loaded.clone().map(|(_, e)| kinetic_ratio(e)).fold(0.0, f64::max);
+        let kinetic = loaded
+            .clone()
+            .map(|(_, e)| kinetic_ratio(e))
+            .fold(0.0, f64::max);
         let balance = loaded.map(|(_, e)| e.balance_error()).fold(0.0, f64::max);
         let least_work = self
             .records
@@ -500,10 +503,19 @@ mod tests {
     fn kinetic_energy_counts_only_once_loaded() {
         // the start (before the settle time) and the records under 5 % of the final work are
         // left out: their ratios are those of a blank carried along
-        let quiet = watch(&[(0.05, 5.0, 1.0), (0.2, 0.4, 2.0), (0.5, 0.3, 10.0), (1.0, 1.0, 100.0)]);
+        let quiet = watch(&[
+            (0.05, 5.0, 1.0),
+            (0.2, 0.4, 2.0),
+            (0.5, 0.3, 10.0),
+            (1.0, 1.0, 100.0),
+        ]);
         let report = quiet.report(false);
         assert_eq!(status(&report, KINETIC), CheckStatus::Ok);
-        assert!(report.lines[0].figure.starts_with("3.00 %"), "{:?}", report.lines[0]);
+        assert!(
+            report.lines[0].figure.starts_with("3.00 %"),
+            "{:?}",
+            report.lines[0]
+        );
         assert_eq!(report.lines.len(), 4, "no tool line without tools");
         let dynamic = watch(&[(0.5, 8.0, 10.0), (1.0, 1.0, 100.0)]);
         let report = dynamic.report(true);
@@ -518,7 +530,10 @@ mod tests {
         w.stop = Some(FORCES);
         let report = w.report(false);
         assert_eq!(status(&report, FORCES), CheckStatus::Stopped);
-        assert!(report.rows().iter().any(|(n, v)| *n == FORCES && v.starts_with("STOPPED")));
+        assert!(report
+            .rows()
+            .iter()
+            .any(|(n, v)| *n == FORCES && v.starts_with("STOPPED")));
     }
 
     #[test]

@@ -152,8 +152,8 @@ pub fn rest_step(model: &Model, settings: &SolverSettings) -> Result<(f64, f64),
             .map_err(|err| format!("element {k}: {err}"))?;
         let mut element_step = e.altitude * (model.density / modulus).sqrt();
         if let Some(bending) = &model.bending {
-            element_step =
-                element_step.min(bending.stable_step(&bending.triangles[k], model.density * thickness));
+            element_step = element_step
+                .min(bending.stable_step(&bending.triangles[k], model.density * thickness));
         }
         let mass = model.density * thickness * e.area;
         physical += mass;
@@ -165,7 +165,11 @@ pub fn rest_step(model: &Model, settings: &SolverSettings) -> Result<(f64, f64),
         }
         step = step.min(element_step);
     }
-    let ratio = if physical > 0.0 { added / physical } else { 0.0 };
+    let ratio = if physical > 0.0 {
+        added / physical
+    } else {
+        0.0
+    };
     Ok((settings.time_step_safety * step, ratio))
 }
 
