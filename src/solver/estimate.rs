@@ -115,7 +115,8 @@ pub fn item_bytes(layers: usize, bending: bool, tools: usize) -> (f64, f64, f64)
         + heap(patch_nodes * size_of::<usize>())
         + heap(patch_nodes * v3)
         + patch_nodes * (v3 + 2 * size_of::<usize>());
-    let per_tool_contact = v3 + size_of::<f64>() + 8 * size_of::<usize>() + 64;
+    // the near-triangle list holds about 8 indices
+    let per_tool_contact = v3 + size_of::<f64>() + size_of::<[usize; 8]>() + 64;
     let per_node = 10 * v3
         + 6 * size_of::<f64>()
         + size_of::<NodeContact>()
@@ -218,7 +219,7 @@ pub fn check_steps(
     estimate: &RunEstimate,
     (step_keys, speed_keys, mass_keys): (&str, &str, &str),
 ) -> Result<(), String> {
-    if !(estimate.steps <= MAX_STEPS) {
+    if estimate.steps.is_nan() || estimate.steps > MAX_STEPS {
         return Err(format!(
             "the run would take {:.3e} steps of {:.3e} s (more than {MAX_STEPS:.0e}): raise \
              {speed_keys}, or {step_keys}",
