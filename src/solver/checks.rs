@@ -440,8 +440,8 @@ fn largest_force(state: &State) -> f64 {
 
 /// Nodes behind a moving tool's surface deeper than the contact's reach (`max_penetration`):
 /// the penalty no longer holds them, so they went through the tool. Only the nodes inside the
-/// tool's bounding box are searched (a full search each, at records only); fixed tools do not
-/// move into the blank.
+/// tool's bounding box, grown by three such depths (a flat holder's box is flat), are searched
+/// (a full search each, at records only); fixed tools do not move into the blank.
 fn tunnelled_nodes(model: &Model, state: &State) -> usize {
     let contact = &model.contact;
     let depth = contact.max_penetration;
@@ -452,7 +452,8 @@ fn tunnelled_nodes(model: &Model, state: &State) -> usize {
         .filter(|(tool, _)| !matches!(tool.motion, ToolMotion::Fixed))
         .map(|(tool, shift)| {
             let (lo, hi) = tool.surface.bounds();
-            (tool, shift, lo, hi)
+            let margin = Vector3::repeat(3.0 * depth);
+            (tool, shift, lo - margin, hi + margin)
         })
         .collect::<Vec<_>>();
     state
