@@ -4,6 +4,8 @@
 use crate::experiment::sheet_test::Progress;
 use crate::forming::Scenario;
 use crate::io::output_folder::{take_folder, FolderLock, ProductFiles};
+use crate::solver::checks::CheckReport;
+use crate::solver::estimate::{format_bytes, peak_memory, RunEstimate};
 use crate::solver::{SolverError, State};
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -135,6 +137,10 @@ pub fn status_row(outcome: &Result<State, SolverError>) -> (&'static str, String
         Err(SolverError::Output { time, .. }) => {
             format!("stopped at t = {time:.4e} s: a result could not be written")
         }
+        Err(SolverError::Check(stop)) => format!(
+            "stopped by the {} check at step {}, t = {:.4e} s, results so far kept",
+            stop.check, stop.step, stop.time
+        ),
         Err(SolverError::Settings(_)) => "not started: bad solver settings".to_string(),
     };
     ("status", status)
@@ -176,6 +182,34 @@ impl ScenarioArgs {
             .clone()
             .unwrap_or_else(|| scenario.output.folder.clone());
         Ok((scenario, dir))
+    }
+}
+
+/// [`print_table`] with the memory (peak against the estimate) and the checks section after
+/// `rows`; each check that is not OK is also a warning line on standard error.
+pub fn print_checked_table(
+    rows: &[(&str, String)],
+    checks: &CheckReport,
+    estimate: &RunEstimate,
+    files: &[PathBuf],
+) {
+    let mut all: Vec<(String, String)> = rows
+        .iter()
+        .map(|(name, value)| (name.to_string(), value.clone()))
+        .collect();
+    let peak = peak_memory().map_or("unknown".into(), format_bytes);
+    all.push((
+        "memory".into(),
+        format!("{peak} peak (estimated {})", format_bytes(estimate.memory)),
+    ));
+    all.push(("checks".into(), String::new()));
+    for (name, value) in checks.rows() {
+        all.push((format!("  {name}"), value));
+    }
+    let borrowed: Vec<(&str, String)> = all.iter().map(|(n, v)| (n.as_str(), v.clone())).collect();
+    print_table(&borrowed, files);
+    for line in checks.warnings() {
+        eprintln!("warning: {}: {}: {}", line.name, line.status, line.figure);
     }
 }
 

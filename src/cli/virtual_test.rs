@@ -2,13 +2,13 @@
 //! progress bar and a summary table.
 
 use super::shared::{
-    interrupt_flag, print_table, status_row, take_output_folder, with_threads, Bar, Watch,
+    interrupt_flag, print_checked_table, status_row, take_output_folder, with_threads, Bar, Watch,
 };
 use crate::experiment::bias_extension::{BiasExtension, BiasRow};
 use crate::experiment::picture_frame::{PictureFrame, PictureFrameRow};
 use crate::experiment::sheet_test::{
-    FrameOutput, HistorySink, LiveOutput, Progress, Record, RunSummary, SheetTest, TestProcess,
-    TestRun, QUASI_STATIC_SPEED_RATIO,
+    quasi_static_time_scaling, FrameOutput, HistorySink, LiveOutput, Progress, Record, SheetTest,
+    TestProcess, TestRun, QUASI_STATIC_SPEED_RATIO,
 };
 use crate::experiment::uniaxial::{UniaxialRow, UniaxialTension};
 use crate::io::output_folder::ProductFiles;
@@ -17,6 +17,7 @@ use crate::io::vtk::PvdSeries;
 use crate::io::CsvStream;
 use crate::material::MaterialCard;
 use crate::mesh::DiagonalPattern;
+use crate::solver::estimate::{self, RunEstimate};
 use std::path::{Path, PathBuf};
 
 #[derive(clap::Subcommand, Debug)]
@@ -239,9 +240,11 @@ fn bias_extension(args: &BiasArgs) -> anyhow::Result<()> {
     let mut test = BiasExtension::benchmark(temperature);
     test.width = dimension("width", args.width)?;
     test.length = dimension("length", args.length)?;
+    test.process.element_size = test.default_element_size();
     c.apply(&mut test.process);
     let names = ("bias extension", "bias-extension");
-    sheet_test(c, &card, names, &test, bias_report)
+    let specimen = (test.width, test.length);
+    sheet_test(c, &card, (names, specimen), &mut test, bias_report)
 }
 
 fn uniaxial(args: &UniaxialArgs) -> anyhow::Result<()> {
@@ -257,9 +260,11 @@ fn uniaxial(args: &UniaxialArgs) -> anyhow::Result<()> {
         );
     }
     test.ply_angle = args.ply_angle;
+    test.process.element_size = test.default_element_size();
     c.apply(&mut test.process);
     let names = ("uniaxial test", "uniaxial");
-    sheet_test(c, &card, names, &test, uniaxial_report)
+    let specimen = (test.width, test.length);
+    sheet_test(c, &card, (names, specimen), &mut test, uniaxial_report)
 }
 
 fn picture_frame(args: &PictureFrameArgs) -> anyhow::Result<()> {
@@ -267,23 +272,45 @@ fn picture_frame(args: &PictureFrameArgs) -> anyhow::Result<()> {
     let (card, temperature) = card_and_temperature(c)?;
     let mut test = PictureFrame::standard(temperature);
     test.side = dimension("side", args.side)?;
+    test.process.element_size = test.default_element_size();
     c.apply(&mut test.process);
     let names = ("picture frame", "picture-frame");
-    sheet_test(c, &card, names, &test, picture_frame_report)
+    let specimen = (test.side, test.side);
+    sheet_test(c, &card, (names, specimen), &mut test, picture_frame_report)
 }
 
 /// Validates and runs a [`SheetTest`] with the shared outputs; `names` as for
-/// [`run_and_report`], `report` turns its rows into columns and plots.
+/// [`run_and_report`], `specimen` its width and length (mm), `report` turns its rows into
+/// columns and plots.
 fn sheet_test<T: SheetTest>(
     c: &CommonArgs,
     card: &MaterialCard,
-    names: (&str, &str),
-    test: &T,
+    (names, specimen): ((&str, &str), (f64, f64)),
+    test: &mut T,
     report: fn(&[T::Row]) -> TestReport,
 ) -> anyhow::Result<()> {
-    test.validate()
-        .map_err(|e| anyhow::anyhow!("{}: {e}", names.0))?;
-    warn_if_dynamic(test, card).map_err(|e| anyhow::anyhow!("{}: {e}", names.0))?;
+    let refuse = |e: String| anyhow::anyhow!("{}: {e}", names.0);
+    test.validate().map_err(refuse)?;
+    check_specimen_memory(test.process(), specimen, card).map_err(refuse)?;
+    let chosen = choose_defaults(c, test, specimen, card).map_err(refuse)?;
+    for line in &chosen {
+        eprintln!("note: {line}");
+    }
+    let test = &*test;
+    warn_if_dynamic(test, card).map_err(refuse)?;
+    let estimate = test
+        .estimate(&card.laminate, card.density)
+        .map_err(refuse)?;
+    estimate::check_steps(
+        &estimate,
+        (
+            "--element-size or --target-step (the step)",
+            "--speed or --time-scaling",
+            "--target-step",
+        ),
+    )
+    .map_err(refuse)?;
+    eprintln!("{}", estimate.describe());
     let p = test.process();
     let shape = (test.settings().end_time, p.time_scaling);
     let history = |mut csv: CsvStream| -> HistorySink<'_, Record> {
@@ -295,14 +322,74 @@ fn sheet_test<T: SheetTest>(
         })
     };
     let columns = report(&[]).columns;
-    run_and_report(c, names, shape, p.history_points, columns, |output, bar| {
-        let output = LiveOutput {
-            history: output.csv.map(history),
-            frames: output.frames,
-        };
-        let result = test.run(&card.laminate, card.density, Some(output), Some(bar))?;
-        Ok((result.run, report(&result.rows)))
-    })
+    run_and_report(
+        c,
+        (names, &estimate, &chosen),
+        shape,
+        p.history_points,
+        columns,
+        |output, bar| {
+            let output = LiveOutput {
+                history: output.csv.map(history),
+                frames: output.frames,
+            };
+            let result = test.run(&card.laminate, card.density, Some(output), Some(bar))?;
+            Ok((result.run, report(&result.rows)))
+        },
+    )
+}
+
+/// The defaults that depend on the specimen and the card, for what the options leave open: the
+/// element size (set relative to the specimen by the test, reported here) and, with neither
+/// --speed nor --time-scaling given, a time scaling low enough for a quasi-static test
+/// ([`quasi_static_time_scaling`]). One line each of what was chosen.
+fn choose_defaults<T: SheetTest>(
+    c: &CommonArgs,
+    test: &mut T,
+    (width, length): (f64, f64),
+    card: &MaterialCard,
+) -> Result<Vec<String>, String> {
+    let mut chosen = Vec::new();
+    if c.element_size.is_none() {
+        let h = test.process().element_size;
+        chosen.push(format!(
+            "element size {h:.4} mm ({:.0} x {:.0} cells on the {width} x {length} mm specimen; \
+             --element-size to change)",
+            width / h,
+            length / h
+        ));
+    }
+    if c.speed.is_none() && c.time_scaling.is_none() {
+        let ratio = test.speed_to_shear_wave(&card.laminate, card.density)?;
+        let scaling = test.process().time_scaling;
+        if let Some(lower) = quasi_static_time_scaling(ratio, scaling) {
+            test.process_mut().time_scaling = lower;
+            chosen.push(format!(
+                "time scaling {lower:.4} instead of {scaling}: the crosshead at {:.2} % of the \
+                 card's shear wave speed, quasi-static (--time-scaling to change)",
+                100.0 * ratio * lower / scaling
+            ));
+        }
+    }
+    Ok(chosen)
+}
+
+/// Refuses a specimen whose mesh would not fit the memory the machine has free, from the
+/// element size before the mesh is made.
+fn check_specimen_memory(
+    p: &TestProcess,
+    (width, length): (f64, f64),
+    card: &MaterialCard,
+) -> Result<(), String> {
+    let cells = |side: f64| (side / p.element_size).round().max(1.0);
+    let (nx, ny) = (cells(width), cells(length));
+    let (elements, nodes) = match p.pattern {
+        DiagonalPattern::Crossed => (4.0 * nx * ny, (nx + 1.0) * (ny + 1.0) + nx * ny),
+        _ => (2.0 * nx * ny, (nx + 1.0) * (ny + 1.0)),
+    };
+    let layers = card.laminate.initial_state().thickness_stretch.len();
+    let (per_element, per_node, _) = estimate::item_bytes(layers, false, 0);
+    estimate::check_memory(elements * per_element + nodes * per_node, "--element-size")
 }
 
 /// The CSV row of the newest of `records`: its test's rows are computed from the records so
@@ -347,7 +434,7 @@ fn warn_if_dynamic<T: SheetTest>(test: &T, card: &MaterialCard) -> Result<(), St
 /// unstable or was interrupted keeps what it wrote and returns its solver error.
 fn run_and_report(
     c: &CommonArgs,
-    (label, name): (&str, &str),
+    ((label, name), estimate, chosen): ((&str, &str), &RunEstimate, &[String]),
     (end_time, time_scaling): (f64, f64),
     history_points: usize,
     columns: [&str; 3],
@@ -382,7 +469,7 @@ fn run_and_report(
     if wrote_frames {
         files.push(c.output.join(format!("{name}.pvd")));
     }
-    print_summary(&run.summary, &run.outcome, time_scaling, &files);
+    print_summary(&run, (time_scaling, chosen), estimate, &files);
     run.outcome.map(|_| ()).map_err(anyhow::Error::from)
 }
 
@@ -579,13 +666,20 @@ fn uniaxial_report(rows: &[UniaxialRow]) -> TestReport {
 }
 
 fn print_summary(
-    s: &RunSummary,
-    outcome: &Result<crate::solver::State, crate::solver::SolverError>,
-    time_scaling: f64,
+    run: &TestRun,
+    (time_scaling, chosen): (f64, &[String]),
+    estimate: &RunEstimate,
     files: &[PathBuf],
 ) {
+    let s = &run.summary;
+    let defaults = if chosen.is_empty() {
+        "none (all given)".to_string()
+    } else {
+        chosen.join("; ")
+    };
     let rows = [
-        status_row(outcome),
+        status_row(&run.outcome),
+        ("defaults chosen", defaults),
         ("steps", format!("{}", s.steps)),
         ("elements", format!("{}", s.elements)),
         (
@@ -612,13 +706,6 @@ fn print_summary(
             format!("{:.3} % of external work", 100.0 * s.worst_balance_error),
         ),
         (
-            "kinetic / internal energy",
-            format!(
-                "{:.3} % at most after the start",
-                100.0 * s.worst_kinetic_ratio
-            ),
-        ),
-        (
             "wall time",
             format!("{:.2} s on {} threads", s.wall_seconds, s.threads),
         ),
@@ -627,7 +714,7 @@ fn print_summary(
             format!("{:.3e}", s.element_steps_per_second()),
         ),
     ];
-    print_table(&rows, files);
+    print_checked_table(&rows, &run.checks, estimate, files);
 }
 
 /// `text()` for a figure the run got to, a dash for one a stopped run did not.

@@ -15,6 +15,10 @@ use crate::mesh::DiagonalPattern;
 use crate::solver::Model;
 use nalgebra::Vector3;
 
+/// Cells across the width of the default mesh: the shear zones of a bias specimen are a third
+/// of its width, so ten cells give each zone three cells or more.
+pub const BIAS_CELLS_ACROSS: f64 = 10.0;
+
 /// A bias-extension test: specimen, ply angle, and the shared process settings.
 #[derive(Clone, Debug, PartialEq)]
 pub struct BiasExtension {
@@ -72,6 +76,12 @@ impl BiasExtension {
         }
     }
 
+    /// The default element size, relative to the specimen: [`BIAS_CELLS_ACROSS`] cells across
+    /// the width (the benchmark's 15 mm on 150 mm).
+    pub fn default_element_size(&self) -> f64 {
+        self.width / BIAS_CELLS_ACROSS
+    }
+
     /// The warp: the width direction x turned by the ply angle towards +y.
     pub fn warp_direction(&self) -> Vector3<f64> {
         let (s, c) = self.ply_angle.to_radians().sin_cos();
@@ -96,6 +106,10 @@ impl SheetTest for BiasExtension {
 
     fn process(&self) -> &TestProcess {
         &self.process
+    }
+
+    fn process_mut(&mut self) -> &mut TestProcess {
+        &mut self.process
     }
 
     /// The specimen's numbers first (they name the test's geometry), then the shared process

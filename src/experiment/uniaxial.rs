@@ -30,6 +30,10 @@ pub struct UniaxialTension {
     pub process: TestProcess,
 }
 
+/// Cells across the width of the default mesh: a strip stretches uniformly across its width,
+/// so two cells carry it (the standard's 12.5 mm on 25 mm).
+pub const STRIP_CELLS_ACROSS: f64 = 2.0;
+
 /// One row of the strip test's history.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct UniaxialRow {
@@ -49,6 +53,12 @@ pub struct UniaxialRow {
 pub type UniaxialRun = SheetTestRun<UniaxialRow>;
 
 impl UniaxialTension {
+    /// The default element size, relative to the specimen: [`STRIP_CELLS_ACROSS`] cells
+    /// across the width.
+    pub fn default_element_size(&self) -> f64 {
+        self.width / STRIP_CELLS_ACROSS
+    }
+
     /// A typical laboratory strip **(choice)**: 25 mm wide with 150 mm between the grips (the
     /// proportions of tensile strips of woven composites), warp along the pull, pulled 3 mm
     /// (2 % strain: the crimp is out of a carbon weave and its yarns are near their failure
@@ -98,6 +108,10 @@ impl SheetTest for UniaxialTension {
 
     fn process(&self) -> &TestProcess {
         &self.process
+    }
+
+    fn process_mut(&mut self) -> &mut TestProcess {
+        &mut self.process
     }
 
     fn validate(&self) -> Result<(), String> {

@@ -3,6 +3,7 @@
 
 pub mod drape_preview;
 pub mod export;
+pub mod preflight;
 pub mod run;
 pub mod scenario;
 pub mod setup;

@@ -4,7 +4,8 @@
 
 use super::setup::FormingModel;
 use crate::experiment::sheet_test::{LiveOutput, Progress};
-use crate::solver::{self, Energies, Model, Observer, SolverError, State};
+use crate::solver::checks::{self, CheckReport, CheckSettings};
+use crate::solver::{Energies, Model, Observer, SolverError, State};
 use nalgebra::Vector3;
 use std::time::Instant;
 
@@ -37,6 +38,8 @@ pub struct FormingRun {
     pub outcome: Result<State, SolverError>,
     pub steps: usize,
     pub wall_seconds: f64,
+    /// The run-time checks (`solver::checks`).
+    pub checks: CheckReport,
 }
 
 struct Recorder<'a, 'p, 'o> {
@@ -124,7 +127,10 @@ pub fn run(
         last_impulse: None,
         stopping: false,
     };
-    let outcome = solver::run(&forming.model, &forming.settings, &mut recorder);
+    let (outcome, checks) = match check_settings(forming) {
+        Ok(check) => checks::run(&forming.model, &forming.settings, check, &mut recorder),
+        Err(e) => (Err(SolverError::Settings(e)), CheckReport::default()),
+    };
     let steps = match &outcome {
         Ok(state) => state.step,
         Err(_) => recorder.steps,
@@ -134,7 +140,24 @@ pub fn run(
         outcome,
         steps,
         wall_seconds: start.elapsed().as_secs_f64(),
+        checks,
     }
+}
+
+/// What the run-time checks of a forming run need: the punch's smooth start (two ramp times,
+/// as for the virtual tests) does not count, and the force bound of the blank and tools.
+fn check_settings(forming: &FormingModel) -> Result<CheckSettings, String> {
+    Ok(CheckSettings {
+        settle_time: 2.0 * forming.punch.ramp_time,
+        force_bound: checks::force_bound(&forming.model)?,
+        loaded_work: checks::carried_kinetic_energy(
+            &forming.model,
+            &forming.settings,
+            forming.punch.speed,
+        )?,
+        dynamic_advice: "lower process.punch_speed, process.time_scaling or \
+                         process.target_time_step",
+    })
 }
 
 /// Wrinkling of the flange, the part of the blank that the die's flat face and the blank

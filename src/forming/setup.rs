@@ -6,6 +6,7 @@
 //! is moved off the mid-plane by half the blank's thickness, so that it touches a face of the
 //! blank at the start; tools read from files are used where the files put them.
 
+use super::preflight;
 use super::scenario::{BlankShape, Scenario, SetKind, ToolFile, ToolFiles, ToolSet, Tools};
 use crate::contact::{
     distance_from_ridge, double_dome_die, double_dome_holder, double_dome_punch, read_stl,
@@ -15,6 +16,7 @@ use crate::experiment::sheet_test::Crosshead;
 use crate::material::MaterialCard;
 use crate::mesh::orientation::{describe_poor_projections, poor_projections, reference_warp};
 use crate::mesh::{read_mesh_file, rectangle, Mesh};
+use crate::solver::estimate::RunEstimate;
 use crate::solver::{Constraint, Model, Motion, SolverSettings};
 use nalgebra::Vector3;
 use std::collections::BTreeMap;
@@ -53,6 +55,8 @@ pub struct FormingModel {
     /// What the user should know before the run: notes of the mesh readers, tool surfaces
     /// flipped, fibre projections that are ill-conditioned; one line each.
     pub notes: Vec<String>,
+    /// Steps, memory and wall time the run will take (`preflight`).
+    pub estimate: RunEstimate,
 }
 
 impl FormingModel {
@@ -60,6 +64,7 @@ impl FormingModel {
         let card = MaterialCard::load(&s.blank.card).map_err(|e| e.to_string())?;
         card.check_temperature("process.temperature", s.process.temperature)
             .map_err(|e| format!("{}: {e} ({})", s.origin, s.blank.card.display()))?;
+        preflight::check_before_mesh(s, &card)?;
         let thickness = card.laminate.reference_thickness();
         let (mesh, mut notes) = blank_mesh(s)?;
         let element_size = match s.blank.shape {
@@ -130,6 +135,7 @@ impl FormingModel {
             damping: 0.0,
             yarn_damping: 0.06,
         };
+        let estimate = preflight::check_model(s, &model, &settings, punch.speed)?;
         let flange_radius = match &s.tools {
             ToolSet::BuiltIn(t) => t.die_opening_radius + t.die_fillet_radius,
             ToolSet::Files(f) => f.flange_radius.unwrap_or(f64::INFINITY),
@@ -146,6 +152,7 @@ impl FormingModel {
             die_tool: 1,
             holder_tool,
             notes,
+            estimate,
         })
     }
 }

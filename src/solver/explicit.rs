@@ -119,6 +119,9 @@ pub enum SolverError {
     Output { time: f64, source: anyhow::Error },
     #[error("interrupted at step {step}, t = {time:.6e} s")]
     Interrupted { step: usize, time: f64 },
+    /// A run-time check ([`super::checks`]) found the result meaningless.
+    #[error(transparent)]
+    Check(super::checks::CheckStop),
 }
 
 /// What the element loop returns per element.

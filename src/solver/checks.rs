@@ -1,0 +1,548 @@
+//! Run-time checks shared by every run of the explicit solver (forming runs and the virtual
+//! tests): what explicit codes watch so that a run whose result means nothing does not end
+//! quietly. At every record: the kinetic energy against the internal work, the energy balance,
+//! the sign of the internal work, the size of the forces and the nodes lost behind a tool. A
+//! check past its hard limit stops the run with [`SolverError::Check`] (the records so far are
+//! kept by the observer); one past its warning level is reported in the [`CheckReport`].
+
+use super::energy::Energies;
+use super::explicit::{self, Observer, SolverError, SolverSettings, State};
+use super::model::Model;
+use crate::contact::ToolMotion;
+use crate::material::MembraneKinematics;
+use nalgebra::{Matrix2, Vector3};
+
+/// Kinetic energy over internal work, once the sheet is loaded, above which the result carries
+/// the sheet's inertia: a quasi-static run stays well under it (a few per cent is the usual
+/// rule of explicit forming codes).
+pub const KINETIC_WARNING: f64 = 0.05;
+
+/// Kinetic energy over internal work above which the run is dynamic, not a forming or a test:
+/// half the work put in still moving. Stopped when it lasts [`KINETIC_STOP_RECORDS`] records in
+/// a row, so that one record caught on a contact impact does not stop a sound run.
+pub const KINETIC_STOP: f64 = 0.5;
+
+/// Consecutive records past [`KINETIC_STOP`] that stop the run.
+pub const KINETIC_STOP_RECORDS: usize = 5;
+
+/// Energy balance error `|W_ext - W_int - E_kin - W_damp| / W_ext` reported as a warning. The
+/// solver stops a run at 50 % (a blow-up); a sound run stays within a few per cent.
+pub const BALANCE_WARNING: f64 = 0.05;
+
+/// The records whose internal work is at least this fraction of its final value count as
+/// loaded for the kinetic-energy figure of the report: before that the ratio of two tiny
+/// numbers means nothing.
+pub const LOADED_FRACTION: f64 = 0.05;
+
+/// Internal work below `-NEGATIVE_WORK_TOLERANCE x max(|W_ext|, E_kin)` stops the run: the
+/// laminate stores or dissipates energy, it never gives back more than it took, so negative
+/// internal work beyond round-off means the material law is outside its range.
+pub const NEGATIVE_WORK_TOLERANCE: f64 = 1e-3;
+
+/// Strain of every yarn across the blank that the physical force bound stands for: no woven
+/// ply carries 100 % strain, so a force beyond `E t L` (plus the tools' applied forces) is a
+/// numerical artefact, not a load.
+pub const FORCE_BOUND_STRAIN: f64 = 1.0;
+
+/// Fraction of the blank's nodes behind a tool beyond the contact's reach that stops the run:
+/// a tool that passed through the blank.
+pub const TUNNELLED_STOP_FRACTION: f64 = 0.01;
+
+/// How a check came out.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CheckStatus {
+    Ok,
+    Warning,
+    Stopped,
+}
+
+impl std::fmt::Display for CheckStatus {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            CheckStatus::Ok => "OK",
+            CheckStatus::Warning => "WARNING",
+            CheckStatus::Stopped => "STOPPED",
+        })
+    }
+}
+
+/// One line of the report: the check, its figure, how it came out.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CheckLine {
+    pub name: &'static str,
+    pub figure: String,
+    pub status: CheckStatus,
+}
+
+/// The checks of a finished (or stopped) run.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CheckReport {
+    pub lines: Vec<CheckLine>,
+}
+
+impl CheckReport {
+    /// The lines that are not OK.
+    pub fn warnings(&self) -> impl Iterator<Item = &CheckLine> {
+        self.lines.iter().filter(|l| l.status != CheckStatus::Ok)
+    }
+
+    /// `(name, "STATUS: figure")` rows for a summary table.
+    pub fn rows(&self) -> Vec<(&'static str, String)> {
+        self.lines
+            .iter()
+            .map(|l| (l.name, format!("{}: {}", l.status, l.figure)))
+            .collect()
+    }
+}
+
+/// Why a check stopped a run.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error(
+    "check '{check}' stopped the run at step {step}, t = {time:.6e} s: {figure}; {advice} \
+     (the records so far are kept)"
+)]
+pub struct CheckStop {
+    pub check: &'static str,
+    pub step: usize,
+    pub time: f64,
+    pub figure: String,
+    pub advice: String,
+}
+
+/// What the checks know of a run beyond its model.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CheckSettings {
+    /// Records before this time (s) do not count: the smooth start of the crosshead or punch.
+    pub settle_time: f64,
+    /// Largest physical force of the run (N), [`force_bound`].
+    pub force_bound: f64,
+    /// Internal work from which the kinetic energy may stop the run (N·mm),
+    /// [`carried_kinetic_energy`].
+    pub loaded_work: f64,
+    /// What to change when the run is too dynamic, for the messages ("lower --speed ...").
+    pub dynamic_advice: &'static str,
+}
+
+/// The physical bound of the forces of a run (N): every yarn across the blank stretched by
+/// [`FORCE_BOUND_STRAIN`] at the laminate's stiffest wave modulus at rest, `E t L` with `L` the
+/// perimeter of the blank's bounding box, plus the forces applied to force-driven tools.
+pub fn force_bound(model: &Model) -> Result<f64, String> {
+    let (mut lo, mut hi) = (
+        Vector3::repeat(f64::INFINITY),
+        Vector3::repeat(f64::NEG_INFINITY),
+    );
+    for x in &model.mesh.nodes {
+        lo = lo.inf(x);
+        hi = hi.sup(x);
+    }
+    let extent = hi - lo;
+    let perimeter = 2.0 * (extent.x + extent.y + extent.z);
+    let applied: f64 = model
+        .tools
+        .iter()
+        .map(|t| match &t.motion {
+            ToolMotion::Force { force, .. } => force.norm(),
+            _ => 0.0,
+        })
+        .sum();
+    let modulus = rest_wave_modulus(model)?;
+    Ok(FORCE_BOUND_STRAIN * modulus * model.laminate.reference_thickness() * perimeter + applied)
+}
+
+/// The largest wave modulus of the elements at rest (MPa).
+fn rest_wave_modulus(model: &Model) -> Result<f64, String> {
+    let laminate = &model.laminate;
+    let rest = laminate.initial_state();
+    model.elements.iter().try_fold(0.0, |most: f64, e| {
+        let kin = MembraneKinematics {
+            c: Matrix2::identity(),
+            c_dot: Matrix2::zeros(),
+            temperature: model.temperature,
+            fibres: e.fibres,
+        };
+        let modulus = laminate
+            .wave_modulus(&kin, &rest)
+            .map_err(|err| err.to_string())?;
+        Ok(most.max(modulus))
+    })
+}
+
+/// The kinetic energy of the whole sheet carried at the tool's (or crosshead's) `speed`
+/// (simulated mm/s), `M v^2 / 2` with the mass after mass scaling (N·mm). Until the sheet has
+/// taken that much internal work its kinetic energy is of the size of the internal work in any
+/// run (a punch lifting a blank carries it along), so the kinetic energy stops a run only
+/// after it.
+pub fn carried_kinetic_energy(
+    model: &Model,
+    settings: &SolverSettings,
+    speed: f64,
+) -> Result<f64, String> {
+    let (_, added_ratio) = super::estimate::rest_step(model, settings)?;
+    let area: f64 = model.elements.iter().map(|e| e.area).sum();
+    let mass = model.density * model.laminate.reference_thickness() * area * (1.0 + added_ratio);
+    Ok(0.5 * mass * speed * speed)
+}
+
+/// Runs the solver with the checks watching every record; returns the outcome and the report.
+/// A stop by a check is a [`SolverError::Check`].
+pub fn run(
+    model: &Model,
+    settings: &SolverSettings,
+    check: CheckSettings,
+    observer: &mut dyn Observer,
+) -> (Result<State, SolverError>, CheckReport) {
+    let mut checked = Checked {
+        inner: observer,
+        watch: Watch::new(check, model.mesh.nodes.len()),
+    };
+    let outcome = explicit::run(model, settings, &mut checked).map_err(|e| match e {
+        SolverError::Output { time, source } => match source.downcast::<CheckStop>() {
+            Ok(stop) => SolverError::Check(stop),
+            Err(source) => SolverError::Output { time, source },
+        },
+        other => other,
+    });
+    let report = checked.watch.report(!model.tools.is_empty());
+    (outcome, report)
+}
+
+/// The observer of the run, with the checks after each of its records.
+struct Checked<'a> {
+    inner: &'a mut dyn Observer,
+    watch: Watch,
+}
+
+impl Observer for Checked<'_> {
+    fn record(&mut self, model: &Model, state: &State) -> anyhow::Result<()> {
+        self.inner.record(model, state)?;
+        self.watch.at_record(model, state)?;
+        Ok(())
+    }
+
+    fn progress(&mut self, state: &State) {
+        self.inner.progress(state);
+    }
+}
+
+/// What the checks keep between records.
+struct Watch {
+    settings: CheckSettings,
+    nodes: usize,
+    /// Time and energies of every record.
+    records: Vec<(f64, Energies)>,
+    kinetic_run: usize,
+    largest_force: f64,
+    most_tunnelled: usize,
+    stop: Option<&'static str>,
+}
+
+impl Watch {
+    fn new(settings: CheckSettings, nodes: usize) -> Self {
+        Self {
+            settings,
+            nodes,
+            records: Vec::new(),
+            kinetic_run: 0,
+            largest_force: 0.0,
+            most_tunnelled: 0,
+            stop: None,
+        }
+    }
+
+    fn at_record(&mut self, model: &Model, state: &State) -> Result<(), CheckStop> {
+        self.records.push((state.time, state.energies));
+        let result = self.check_record(model, state);
+        if let Err(stop) = &result {
+            self.stop = Some(stop.check);
+        }
+        result
+    }
+
+    fn check_record(&mut self, model: &Model, state: &State) -> Result<(), CheckStop> {
+        let stop = |check: &'static str, figure: String, advice: &str| CheckStop {
+            check,
+            step: state.step,
+            time: state.time,
+            figure,
+            advice: advice.into(),
+        };
+        let force = largest_force(state);
+        self.largest_force = self.largest_force.max(force);
+        if !force.is_finite() || force > self.settings.force_bound {
+            return Err(stop(
+                FORCES,
+                format!(
+                    "a force of {force:.3e} N, beyond the physical bound {:.3e} N of this blank \
+                     and card",
+                    self.settings.force_bound
+                ),
+                "check the card's stiffness and density and the mass scaling \
+                 (target time step)",
+            ));
+        }
+        let e = &state.energies;
+        let settled = state.time > self.settings.settle_time;
+        let scale = e.external_work.abs().max(e.kinetic);
+        if settled && e.internal_work < -NEGATIVE_WORK_TOLERANCE * scale {
+            return Err(stop(
+                INTERNAL_WORK,
+                format!(
+                    "the internal work is negative, {:.4e} N·mm against {:.4e} N·mm put in",
+                    e.internal_work, e.external_work
+                ),
+                "the laminate gives back more than it took: its card is outside its range \
+                 (check the stiffness and shear parameters)",
+            ));
+        }
+        let ratio = kinetic_ratio(e);
+        let loaded = settled && e.internal_work >= self.settings.loaded_work;
+        self.kinetic_run = if loaded && ratio > KINETIC_STOP {
+            self.kinetic_run + 1
+        } else {
+            0
+        };
+        if self.kinetic_run >= KINETIC_STOP_RECORDS {
+            return Err(stop(
+                KINETIC,
+                format!(
+                    "the kinetic energy is {:.0} % of the internal work ({} records in a row \
+                     above {:.0} %): the run is dynamic, not quasi-static",
+                    100.0 * ratio,
+                    KINETIC_STOP_RECORDS,
+                    100.0 * KINETIC_STOP
+                ),
+                self.settings.dynamic_advice,
+            ));
+        }
+        let tunnelled = tunnelled_nodes(model, state);
+        self.most_tunnelled = self.most_tunnelled.max(tunnelled);
+        if tunnelled as f64 > TUNNELLED_STOP_FRACTION * self.nodes as f64 {
+            return Err(stop(
+                PENETRATION,
+                format!(
+                    "{tunnelled} of {} nodes are behind a tool beyond the contact's reach: a \
+                     tool passed through the blank",
+                    self.nodes
+                ),
+                self.settings.dynamic_advice,
+            ));
+        }
+        Ok(())
+    }
+
+    fn report(&self, tools: bool) -> CheckReport {
+        let status = |name: &str, warn: bool| {
+            if self.stop == Some(name) {
+                CheckStatus::Stopped
+            } else if warn {
+                CheckStatus::Warning
+            } else {
+                CheckStatus::Ok
+            }
+        };
+        let final_work = self.records.last().map_or(0.0, |r| r.1.internal_work);
+        let loaded = self.records.iter().filter(|(t, e)| {
+            *t > self.settings.settle_time
+                && e.internal_work > 0.0
+                && e.internal_work >= LOADED_FRACTION * final_work
+        });
+        let kinetic = loaded
+            .clone()
+            .map(|(_, e)| kinetic_ratio(e))
+            .fold(0.0, f64::max);
+        let balance = loaded.map(|(_, e)| e.balance_error()).fold(0.0, f64::max);
+        let least_work = self
+            .records
+            .iter()
+            .map(|r| r.1.internal_work)
+            .fold(f64::INFINITY, f64::min);
+        let mut lines = vec![
+            CheckLine {
+                name: KINETIC,
+                figure: format!(
+                    "{:.2} % at most once loaded (warning above {} %, stop above {} %)",
+                    100.0 * kinetic,
+                    100.0 * KINETIC_WARNING,
+                    100.0 * KINETIC_STOP
+                ),
+                status: status(KINETIC, kinetic > KINETIC_WARNING),
+            },
+            CheckLine {
+                name: BALANCE,
+                figure: format!(
+                    "{:.3} % of the external work at most once loaded (warning above {} %)",
+                    100.0 * balance,
+                    100.0 * BALANCE_WARNING
+                ),
+                status: status(BALANCE, balance > BALANCE_WARNING),
+            },
+            CheckLine {
+                name: INTERNAL_WORK,
+                figure: format!("{:.4e} N·mm at least", least_work.min(0.0)),
+                status: status(INTERNAL_WORK, false),
+            },
+            CheckLine {
+                name: FORCES,
+                figure: format!(
+                    "{:.3e} N at most (physical bound {:.3e} N)",
+                    self.largest_force, self.settings.force_bound
+                ),
+                status: status(FORCES, false),
+            },
+        ];
+        if tools {
+            lines.push(CheckLine {
+                name: PENETRATION,
+                figure: format!(
+                    "{} nodes at most behind a tool beyond the contact's reach",
+                    self.most_tunnelled
+                ),
+                status: status(PENETRATION, self.most_tunnelled > 0),
+            });
+        }
+        CheckReport { lines }
+    }
+}
+
+const KINETIC: &str = "kinetic / internal energy";
+const BALANCE: &str = "energy balance";
+const INTERNAL_WORK: &str = "internal work";
+const FORCES: &str = "forces";
+const PENETRATION: &str = "tool penetration";
+
+/// `E_kin / W_int`, 0 before any internal work.
+fn kinetic_ratio(e: &Energies) -> f64 {
+    if e.internal_work > 0.0 {
+        e.kinetic / e.internal_work
+    } else {
+        0.0
+    }
+}
+
+/// The largest force of the run at this state (N): a tool's load or the sum of the reactions
+/// at the constrained nodes; infinite when one is not a number.
+fn largest_force(state: &State) -> f64 {
+    let finite = |v: &Vector3<f64>| {
+        if v.iter().all(|c| c.is_finite()) {
+            v.norm()
+        } else {
+            f64::INFINITY
+        }
+    };
+    let tools = state
+        .tool_loads
+        .iter()
+        .map(|l| finite(&l.force))
+        .fold(0.0, f64::max);
+    let reactions: f64 = state.reactions.iter().map(finite).sum();
+    tools.max(reactions)
+}
+
+/// Nodes behind a moving tool's surface deeper than the contact's reach (`max_penetration`):
+/// the penalty no longer holds them, so they went through the tool. Only the nodes inside the
+/// tool's bounding box, grown by three such depths (a flat holder's box is flat), are searched
+/// (a full search each, at records only); fixed tools do not move into the blank.
+fn tunnelled_nodes(model: &Model, state: &State) -> usize {
+    let contact = &model.contact;
+    let depth = contact.max_penetration;
+    let moving = model
+        .tools
+        .iter()
+        .zip(&state.tool_translations)
+        .filter(|(tool, _)| !matches!(tool.motion, ToolMotion::Fixed))
+        .map(|(tool, shift)| {
+            let (lo, hi) = tool.surface.bounds();
+            let margin = Vector3::repeat(3.0 * depth);
+            (tool, shift, lo - margin, hi + margin)
+        })
+        .collect::<Vec<_>>();
+    state
+        .positions
+        .iter()
+        .filter(|x| {
+            moving.iter().any(|(tool, shift, lo, hi)| {
+                let local = *x - *shift;
+                let inside = (0..3).all(|d| local[d] >= lo[d] && local[d] <= hi[d]);
+                inside && tool.gap(&local, contact.offset) < -depth
+            })
+        })
+        .count()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn watch(records: &[(f64, f64, f64)]) -> Watch {
+        let settings = CheckSettings {
+            settle_time: 0.1,
+            force_bound: 1e6,
+            loaded_work: 0.0,
+            dynamic_advice: "",
+        };
+        let mut w = Watch::new(settings, 10);
+        w.records = records
+            .iter()
+            .map(|&(time, kinetic, internal_work)| {
+                let energies = Energies {
+                    kinetic,
+                    internal_work,
+                    external_work: kinetic + internal_work,
+                    ..Energies::default()
+                };
+                (time, energies)
+            })
+            .collect();
+        w
+    }
+
+    fn status(report: &CheckReport, name: &str) -> CheckStatus {
+        report.lines.iter().find(|l| l.name == name).unwrap().status
+    }
+
+    #[test]
+    fn kinetic_energy_counts_only_once_loaded() {
+        // the start (before the settle time) and the records under 5 % of the final work are
+        // left out: their ratios are those of a blank carried along
+        let quiet = watch(&[
+            (0.05, 5.0, 1.0),
+            (0.2, 0.4, 2.0),
+            (0.5, 0.3, 10.0),
+            (1.0, 1.0, 100.0),
+        ]);
+        let report = quiet.report(false);
+        assert_eq!(status(&report, KINETIC), CheckStatus::Ok);
+        assert!(
+            report.lines[0].figure.starts_with("3.00 %"),
+            "{:?}",
+            report.lines[0]
+        );
+        assert_eq!(report.lines.len(), 4, "no tool line without tools");
+        let dynamic = watch(&[(0.5, 8.0, 10.0), (1.0, 1.0, 100.0)]);
+        let report = dynamic.report(true);
+        assert_eq!(status(&report, KINETIC), CheckStatus::Warning);
+        assert_eq!(report.warnings().count(), 1);
+        assert_eq!(report.rows().len(), 5);
+    }
+
+    #[test]
+    fn a_stop_is_reported_as_stopped() {
+        let mut w = watch(&[(0.5, 8.0, 10.0)]);
+        w.stop = Some(FORCES);
+        let report = w.report(false);
+        assert_eq!(status(&report, FORCES), CheckStatus::Stopped);
+        assert!(report
+            .rows()
+            .iter()
+            .any(|(n, v)| *n == FORCES && v.starts_with("STOPPED")));
+    }
+
+    #[test]
+    fn the_kinetic_ratio_is_zero_before_any_internal_work() {
+        let e = Energies {
+            kinetic: 1.0,
+            ..Energies::default()
+        };
+        assert_eq!(kinetic_ratio(&e), 0.0);
+    }
+}
