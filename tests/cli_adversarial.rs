@@ -644,6 +644,18 @@ fn scenario_cases(f: &Fixtures) -> Vec<Case> {
             names: vec![key.into()],
         });
     }
+    let absurd = f.card(
+        "card-absurd-stiffness",
+        "warp_tension = [4.0e4, 2.0e6]\nweft_tension = [4.0e4, 2.0e6]",
+        "warp_tension = [4.0e300, 2.0e6]\nweft_tension = [4.0e300, 2.0e6]",
+    );
+    let on_absurd = f.scenario_on_card("scenario-absurd-card", &absurd);
+    cases.push(Case {
+        name: "scenario on a card of absurd stiffness".into(),
+        args: run(&on_absurd, &[], "absurd-card"),
+        code: 2,
+        names: vec!["process.target_time_step".into()],
+    });
     let garbage_card = f.file("garbage.toml", b"\x00\x01binary\xff");
     let on_garbage = f.scenario_on_card("scenario-garbage-card", &garbage_card);
     cases.push(Case {
@@ -652,8 +664,34 @@ fn scenario_cases(f: &Fixtures) -> Vec<Case> {
         code: 2,
         names: vec![garbage_card],
     });
-    let overrides: [(&str, &str, &str); 6] = [
+    let overrides: [(&str, &str, &str); 12] = [
         ("set without value", "process.stroke", "--set"),
+        (
+            "cells beyond the memory",
+            "blank.element_size=0.01",
+            "blank.element_size",
+        ),
+        ("blank of 1e300 mm", "blank.width=1e300", "blank.width"),
+        (
+            "punch through the ply in a step",
+            "process.punch_speed=100000",
+            "process.punch_speed",
+        ),
+        (
+            "stroke in a few hundred steps",
+            "process.punch_speed=2000",
+            "process.punch_speed",
+        ),
+        (
+            "absurd step count",
+            "process.punch_speed=1e-6",
+            "process.punch_speed",
+        ),
+        (
+            "mass scaling beyond reason",
+            "process.target_time_step=1",
+            "process.target_time_step",
+        ),
         (
             "set text for a number",
             "process.stroke=abc",

@@ -2,37 +2,20 @@
 
 mod common;
 
-use common::thermostamp;
+use common::{thermostamp, QUICK_BIAS_EXTENSION};
 use std::path::PathBuf;
 
 #[test]
 fn bias_extension_writes_history_frames_and_plots() {
     let out_dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("bias-cli");
     let _ = std::fs::remove_dir_all(&out_dir);
-    let out = thermostamp(&[
-        "test",
-        "bias-extension",
-        "--card",
-        "tests/data/stiff-yarn-fabric.toml",
-        "--element-size",
-        "37.5",
-        "--end-displacement",
-        "20",
-        "--speed",
-        "200",
-        "--time-scaling",
-        "1",
-        "--target-step",
-        "0",
-        "--frames",
-        "3",
-        "--history-points",
-        "12",
-        "--threads",
-        "1",
-        "--output",
-        out_dir.to_str().unwrap(),
-    ]);
+    let out = thermostamp(
+        &[
+            &QUICK_BIAS_EXTENSION[..],
+            &["--threads", "1", "--output", out_dir.to_str().unwrap()],
+        ]
+        .concat(),
+    );
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(
         out.status.success(),

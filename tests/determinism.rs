@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{assert_bad_input, thermostamp};
+use common::{assert_bad_input, thermostamp, QUICK_BIAS_EXTENSION};
 use std::path::{Path, PathBuf};
 
 fn out_dir(name: &str) -> PathBuf {
@@ -145,26 +145,7 @@ fn forming_run_is_bit_identical_on_one_and_two_threads() {
 /// 100,000 is cut to the machine's cores with a note instead of hanging.
 #[test]
 fn bias_extension_is_bit_identical_on_any_thread_count() {
-    let args = [
-        "test",
-        "bias-extension",
-        "--card",
-        "tests/data/stiff-yarn-fabric.toml",
-        "--element-size",
-        "37.5",
-        "--end-displacement",
-        "20",
-        "--speed",
-        "200",
-        "--time-scaling",
-        "1",
-        "--target-step",
-        "0",
-        "--frames",
-        "3",
-        "--history-points",
-        "12",
-    ];
+    let args = QUICK_BIAS_EXTENSION;
     let (one, two, many) = (out_dir("bias-1"), out_dir("bias-2"), out_dir("bias-many"));
     run_on_threads(&args, "1", &one);
     run_on_threads(&args, "2", &two);

@@ -10,7 +10,7 @@
 
 mod common;
 
-use common::{repo_path, run_ok, scratch_dir};
+use common::{repo_path, run_ok, scratch_dir, QUICK_BIAS_EXTENSION};
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::process::Command;
@@ -189,30 +189,13 @@ fn every_paraview_file_reads_in_vtk_as_written() {
         run.to_str().unwrap(),
     ]);
     // a dry fabric card (one fabric layer): the same stress array name as the prepreg's
-    run_ok(&[
-        "test",
-        "bias-extension",
-        "--card",
-        "tests/data/stiff-yarn-fabric.toml",
-        "--element-size",
-        "37.5",
-        "--end-displacement",
-        "20",
-        "--speed",
-        "200",
-        "--time-scaling",
-        "1",
-        "--target-step",
-        "0",
-        "--frames",
-        "3",
-        "--history-points",
-        "12",
-        "--threads",
-        "1",
-        "--output",
-        bias.to_str().unwrap(),
-    ]);
+    run_ok(
+        &[
+            &QUICK_BIAS_EXTENSION[..],
+            &["--threads", "1", "--output", bias.to_str().unwrap()],
+        ]
+        .concat(),
+    );
     run_ok(&[
         "drape",
         "examples/hemisphere.toml",

@@ -10,9 +10,10 @@ use crate::solver::estimate::{self, item_bytes, RunEstimate};
 use crate::solver::{Model, SolverSettings};
 
 /// What sets the size of a built-in rectangle, of a file blank, of built-in tools.
-const RECTANGLE_KEYS: &str = "blank.element_size";
+const RECTANGLE_KEYS: &str = "blank.element_size (or shrink blank.width, blank.length)";
 const FILE_KEYS: &str = "the blank's mesh (blank.mesh)";
-const TOOL_KEYS: &str = "tools.resolution";
+/// The built-in tools are meshed over the blank's reach, so a huge blank makes huge tools too.
+const TOOL_KEYS: &str = "tools.resolution (or shrink blank.width, blank.length)";
 
 /// Refuses a built-in rectangle (and built-in tool set) that would not fit the memory the
 /// machine has free, from the scenario's numbers alone: called before the mesh is made, so

@@ -222,6 +222,10 @@ impl Observer for Checked<'_> {
     fn progress(&mut self, state: &State) {
         self.inner.progress(state);
     }
+
+    fn interrupted(&mut self) -> bool {
+        self.inner.interrupted()
+    }
 }
 
 /// What the checks keep between records.

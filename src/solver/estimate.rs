@@ -203,8 +203,11 @@ pub fn estimate(model: &Model, settings: &SolverSettings) -> Result<RunEstimate,
 pub fn check_memory(memory: f64, keys: &str) -> Result<(), String> {
     match available_memory() {
         Some(free) if memory > free => Err(format!(
-            "the run would need about {} of memory and the machine has {} free: coarsen {keys}",
-            format_bytes(memory),
+            "the run would need {} of memory and the machine has {} free: coarsen {keys}",
+            match format_bytes(memory) {
+                unbounded if unbounded.starts_with("more") => unbounded,
+                bytes => format!("about {bytes}"),
+            },
             format_bytes(free)
         )),
         _ => Ok(()),
@@ -295,7 +298,9 @@ fn proc_kilobytes(file: &str, key: &str) -> Option<f64> {
 /// `1.5 GiB`, `320 MiB`.
 pub fn format_bytes(bytes: f64) -> String {
     const MIB: f64 = 1024.0 * 1024.0;
-    if bytes >= 1024.0 * MIB {
+    if !bytes.is_finite() || bytes >= 1e18 {
+        "more than 1e18 bytes".into()
+    } else if bytes >= 1024.0 * MIB {
         format!("{:.1} GiB", bytes / (1024.0 * MIB))
     } else {
         format!("{:.0} MiB", bytes / MIB)

@@ -93,6 +93,29 @@ pub fn thermostamp(args: &[&str]) -> Output {
         .expect("the binary runs")
 }
 
+/// A quick bias-extension test of the stiff-yarn fabric: 37.5 mm cells, 20 mm of travel at
+/// 200 mm/s without time or mass scaling, three frames and twelve history rows (a second).
+pub const QUICK_BIAS_EXTENSION: [&str; 18] = [
+    "test",
+    "bias-extension",
+    "--card",
+    "tests/data/stiff-yarn-fabric.toml",
+    "--element-size",
+    "37.5",
+    "--end-displacement",
+    "20",
+    "--speed",
+    "200",
+    "--time-scaling",
+    "1",
+    "--target-step",
+    "0",
+    "--frames",
+    "3",
+    "--history-points",
+    "12",
+];
+
 /// Exit code 2 and a single line on stderr that contains every piece of `expected`.
 pub fn assert_bad_input(args: &[&str], expected: &[&str]) {
     let out = thermostamp(args);
