@@ -231,7 +231,7 @@ fn material_point_cases(f: &Fixtures) -> Vec<Case> {
     add(
         "card garbage bytes",
         point(&garbage, "laminate", &history),
-        &[garbage.clone()],
+        std::slice::from_ref(&garbage),
     );
     let cards: [(&str, &str, &str, &str); 9] = [
         (
