@@ -17,14 +17,7 @@ use thermostamp::mesh::{rectangle, DiagonalPattern};
 /// Whether `ccx` can be run; `false` (skip) only outside CI.
 fn ccx_available(test: &str) -> bool {
     let found = Command::new("ccx").arg("-v").output().is_ok();
-    if !found {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "CI is set but CalculiX (ccx) is not on the PATH: install calculix-ccx"
-        );
-        println!("{test}: skipped, CalculiX (ccx) is not installed");
-    }
-    found
+    common::reader_available(found, test, "CalculiX (ccx, Debian package calculix-ccx)")
 }
 
 /// Runs `ccx` on `dir/job.inp` and returns its standard output, after checking that it read

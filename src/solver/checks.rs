@@ -9,8 +9,7 @@ use super::energy::Energies;
 use super::explicit::{self, Observer, SolverError, SolverSettings, State};
 use super::model::Model;
 use crate::contact::ToolMotion;
-use crate::material::MembraneKinematics;
-use nalgebra::{Matrix2, Vector3};
+use nalgebra::Vector3;
 
 /// Kinetic energy over internal work, once the sheet is loaded, above which the result carries
 /// the sheet's inertia: a quasi-static run stays well under it (a few per cent is the usual
@@ -153,13 +152,8 @@ pub fn force_bound(model: &Model) -> Result<f64, String> {
 fn rest_wave_modulus(model: &Model) -> Result<f64, String> {
     let laminate = &model.laminate;
     let rest = laminate.initial_state();
-    model.elements.iter().try_fold(0.0, |most: f64, e| {
-        let kin = MembraneKinematics {
-            c: Matrix2::identity(),
-            c_dot: Matrix2::zeros(),
-            temperature: model.temperature,
-            fibres: e.fibres,
-        };
+    (0..model.elements.len()).try_fold(0.0, |most: f64, k| {
+        let kin = explicit::rest_kinematics(model, k);
         let modulus = laminate
             .wave_modulus(&kin, &rest)
             .map_err(|err| err.to_string())?;

@@ -2,13 +2,13 @@
 //! how long it will run, and the set-up refusals that follow from them (a run that cannot fit
 //! the machine, an absurd step count, a travel covered in too few steps).
 
-use super::explicit::SolverSettings;
+use super::explicit::{rest_kinematics, SolverSettings};
 use super::model::Model;
 use crate::contact::NodeContact;
 use crate::element::bending_triangle::BendingTriangle;
 use crate::element::MembraneTriangle;
-use crate::material::{LaminateState, MembraneKinematics, MembraneResponse};
-use nalgebra::{Matrix2, Vector3};
+use crate::material::{LaminateState, MembraneResponse};
+use nalgebra::Vector3;
 
 /// More steps than this is not a run anyone waits for (days at the rates below): refused.
 pub const MAX_STEPS: f64 = 1e9;
@@ -142,12 +142,7 @@ pub fn rest_step(model: &Model, settings: &SolverSettings) -> Result<(f64, f64),
     let mut step = f64::INFINITY;
     let (mut added, mut physical) = (0.0, 0.0);
     for (k, e) in model.elements.iter().enumerate() {
-        let kin = MembraneKinematics {
-            c: Matrix2::identity(),
-            c_dot: Matrix2::zeros(),
-            temperature: model.temperature,
-            fibres: e.fibres,
-        };
+        let kin = rest_kinematics(model, k);
         let modulus = laminate
             .wave_modulus(&kin, &rest)
             .map_err(|err| format!("element {k}: {err}"))?;

@@ -697,7 +697,9 @@ impl State {
     }
 }
 
-fn rest_kinematics(model: &Model, k: usize) -> MembraneKinematics {
+/// Element `k` of `model` undeformed and at rest, at the model's temperature: what the stable
+/// step at rest and the run's estimate and checks evaluate the laminate on.
+pub(crate) fn rest_kinematics(model: &Model, k: usize) -> MembraneKinematics {
     MembraneKinematics {
         c: Matrix2::identity(),
         c_dot: Matrix2::zeros(),

@@ -116,6 +116,20 @@ pub const QUICK_BIAS_EXTENSION: [&str; 18] = [
     "12",
 ];
 
+/// Whether an outside reader a test runs the output through (CalculiX, VTK) is there: `found`
+/// as probed by the test; a missing one fails the test under CI (which installs it) and skips
+/// it, saying so, elsewhere.
+pub fn reader_available(found: bool, test: &str, missing: &str) -> bool {
+    if !found {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "CI is set but {missing} is not available"
+        );
+        println!("{test}: skipped, {missing} is not installed");
+    }
+    found
+}
+
 /// Exit code 2 and a single line on stderr that contains every piece of `expected`.
 pub fn assert_bad_input(args: &[&str], expected: &[&str]) {
     let out = thermostamp(args);
