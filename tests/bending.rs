@@ -129,7 +129,7 @@ fn bending_forces_are_the_gradient_of_the_energy() {
 
 /// Single-diagonal cells: on cells with valence-4 nodes (alternating, crossed) the bending
 /// patches let the strip relax into a wavy state and the load comes out low (0.90 and 0.56 of
-/// Euler's), see `element::bending_triangle`.
+/// Euler's), see `element::bending`.
 const PATTERN: DiagonalPattern = DiagonalPattern::Right;
 
 /// Internal work at every output: its slope against the end's travel is the mean end force,

@@ -182,7 +182,7 @@ fn rigid_rotation_gives_no_stress() {
 #[test]
 fn stable_step_is_below_the_critical_step_of_the_element() {
     use nalgebra::{DMatrix, Vector2};
-    use thermostamp::element::MembraneTriangle;
+    use thermostamp::element::MembraneElement;
     let card =
         thermostamp::material::MaterialCard::load(&repo_path("tests/data/stiff-yarn-fabric.toml"))
             .unwrap();
@@ -223,7 +223,7 @@ fn stable_step_is_below_the_critical_step_of_the_element() {
                 * trellis(g, 1.002, 1.002, 1.0)
                 * rotation([0.0, 0.0, -std::f64::consts::FRAC_PI_4]);
             let x0 = x_ref.map(|x| shear * x);
-            let e = MembraneTriangle::new(
+            let e = MembraneElement::new(
                 [0, 1, 2],
                 x_ref,
                 &Vector3::new(angle.cos(), angle.sin(), 0.0),

@@ -6,6 +6,7 @@ use crate::drape::DrapeResult;
 use crate::forming::drape_preview::{drape_preview, Generators};
 use crate::io::vtk::{write_vtu, Field, FieldData, VtuFrame};
 use crate::io::write_csv;
+use crate::mesh::Cell;
 use anyhow::Context;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -105,12 +106,12 @@ fn write_cells(dir: &Path, net: &DrapeResult) -> anyhow::Result<PathBuf> {
     Ok(path)
 }
 
-/// `drape.vtu`: each cell of the net as two triangles carrying its shear angle, on one point
+/// `drape.vtu`: each cell of the net as a quadrilateral carrying its shear angle, on one point
 /// per node of the net (neighbouring cells share their corners, as in the net).
 fn write_net(dir: &Path, net: &DrapeResult) -> anyhow::Result<PathBuf> {
     let mut points = Vec::new();
     let mut point_of: HashMap<(i64, i64), usize> = HashMap::new();
-    let mut triangles = Vec::new();
+    let mut cells = Vec::new();
     let mut shear = Vec::new();
     for c in net.cells() {
         let nodes = [(0, 0), (1, 0), (1, 1), (0, 1)].map(|(a, b)| (c.i + a, c.j + b));
@@ -123,9 +124,8 @@ fn write_net(dir: &Path, net: &DrapeResult) -> anyhow::Result<PathBuf> {
                 points.len() - 1
             })
         });
-        triangles.push([p0, p1, p2]);
-        triangles.push([p0, p2, p3]);
-        shear.extend([c.shear_deg, c.shear_deg]);
+        cells.push(Cell::Quad([p0, p1, p2, p3]));
+        shear.push(c.shear_deg);
     }
     let path = dir.join("drape.vtu");
     let cell_data = [Field {
@@ -136,7 +136,7 @@ fn write_net(dir: &Path, net: &DrapeResult) -> anyhow::Result<PathBuf> {
         &path,
         &VtuFrame {
             points: &points,
-            triangles: &triangles,
+            cells: &cells,
             point_data: &[],
             cell_data: &cell_data,
         },

@@ -179,11 +179,11 @@ fn write_shear_map(
             Some(l) => format!("|shear angle| (°), locking {l}° marked"),
             None => "|shear angle| (°)".into(),
         },
-        triangles: model
+        cells: model
             .mesh
-            .triangles
+            .cells
             .iter()
-            .map(|t| t.map(|n| (x[n].x, x[n].y)))
+            .map(|t| t.nodes().iter().map(|&n| (x[n].x, x[n].y)).collect())
             .collect(),
         values: shear_angles(model, state)
             .into_iter()

@@ -1,7 +1,7 @@
 //! Finite elements of the sheet.
 
-pub mod bending_triangle;
-pub mod membrane_triangle;
+pub mod bending;
+pub mod membrane;
 
-pub use bending_triangle::{Bending, BendingRigidity};
-pub use membrane_triangle::MembraneTriangle;
+pub use bending::{Bending, BendingRigidity};
+pub use membrane::MembraneElement;

@@ -181,7 +181,7 @@ impl PictureFrame {
         (0..model.elements.len())
             .filter(|&k| {
                 model.elements[k]
-                    .nodes
+                    .nodes()
                     .iter()
                     .filter(|&&n| on_frame[n])
                     .count()

@@ -437,7 +437,7 @@ pub fn write_frame(
         time,
         &VtuFrame {
             points: &frame.points,
-            triangles: &model.mesh.triangles,
+            cells: &model.mesh.cells,
             point_data: &frame.point_data,
             cell_data: &frame.cell_data,
         },

@@ -16,12 +16,12 @@ use std::path::{Path, PathBuf};
 pub const FORMED_INP: &str = "formed-blank.inp";
 pub const FORMED_VTU: &str = "formed-blank.vtu";
 
-/// The blank at `state`: the reference mesh's triangles and sets on the current positions,
-/// and per triangle the current warp `F a0 / |F a0|` and thickness.
+/// The blank at `state`: the reference mesh's cells and sets on the current positions,
+/// and per element the current warp `F a0 / |F a0|` and thickness.
 pub fn formed_blank(model: &Model, state: &State) -> (Mesh, ElementOutput) {
     let mesh = Mesh {
         nodes: state.positions.clone(),
-        triangles: model.mesh.triangles.clone(),
+        cells: model.mesh.cells.clone(),
         node_sets: model.mesh.node_sets.clone(),
         element_sets: model.mesh.element_sets.clone(),
         warp_directions: None,
@@ -50,7 +50,7 @@ pub fn write_formed_blank(
         &vtu,
         &VtuFrame {
             points: &frame.points,
-            triangles: &model.mesh.triangles,
+            cells: &model.mesh.cells,
             point_data: &frame.point_data,
             cell_data: &frame.cell_data,
         },

@@ -270,12 +270,11 @@ pub fn flange_wrinkles(f: &FormingModel, state: &State, nodal_area: &[f64]) -> W
         })
 }
 
-/// Nodes on the edge of the blank: those of the edges that belong to one triangle only.
+/// Nodes on the edge of the blank: those of the edges that belong to one element only.
 fn boundary_nodes(model: &Model) -> Vec<usize> {
     let mut count = std::collections::HashMap::new();
-    for t in &model.mesh.triangles {
-        for k in 0..3 {
-            let (a, b) = (t[k], t[(k + 1) % 3]);
+    for t in &model.mesh.cells {
+        for (a, b) in t.edges() {
             *count.entry((a.min(b), a.max(b))).or_insert(0usize) += 1;
         }
     }

@@ -37,7 +37,7 @@ pub struct Blank {
 pub enum BlankShape {
     /// Size along x and y (mm), centred on the punch axis; target element size (mm); cells cut
     /// by `pattern` (single diagonals by default: bending is accurate on them, see
-    /// `element::bending_triangle`).
+    /// `element::bending`).
     Rectangle {
         width: f64,
         length: f64,

@@ -90,7 +90,7 @@ impl FormingModel {
         }
         notes.extend(describe_poor_projections(
             &poor_projections(&mesh, &warp),
-            mesh.triangles.len(),
+            mesh.cells.len(),
         ));
         let constraints = boundary_constraints(s, &mesh)?;
         let blank_mass = card.density * thickness * mesh.total_area();
@@ -506,7 +506,7 @@ fn read_tool_file(tool: &ToolFile) -> Result<TriangleSurface, String> {
     };
     Ok(TriangleSurface {
         vertices: mesh.nodes,
-        triangles: mesh.triangles,
+        triangles: mesh.cells.iter().flat_map(|c| c.triangles()).collect(),
     })
 }
 

@@ -559,7 +559,8 @@ pub struct MapPlot {
     pub title: String,
     /// Label of the colour bar, with units.
     pub value_label: String,
-    pub triangles: Vec<[(f64, f64); 3]>,
+    /// The cells' corners (a polygon each), one value per cell.
+    pub cells: Vec<Vec<(f64, f64)>>,
     pub values: Vec<f64>,
     /// Values above this are flagged (e.g. the locking angle); `None`: no flag.
     pub limit: Option<f64>,
@@ -599,7 +600,7 @@ pub fn write_map_png(path: &Path, map: &MapPlot, width: u32, height: u32) -> Res
         .copied()
         .filter(|v| v.is_finite())
         .collect();
-    if map.triangles.is_empty() || finite.is_empty() {
+    if map.cells.is_empty() || finite.is_empty() {
         return Err(PlotError::Empty { title });
     }
     if !((MIN_WIDTH..=MAX_SIDE).contains(&width) && (MIN_HEIGHT..=MAX_SIDE).contains(&height)) {
@@ -635,7 +636,7 @@ fn draw_map(
     let top = map.limit.map_or(top, |l| top.max(l)).max(1e-12);
     let (left, right) = root.split_horizontally(width * 4 / 5);
 
-    let points = map.triangles.iter().flatten();
+    let points = map.cells.iter().flatten();
     let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
     for &(x, y) in points {
         (x0, x1, y0, y1) = (x0.min(x), x1.max(x), y0.min(y), y1.max(y));
@@ -672,10 +673,10 @@ fn draw_map(
     };
     chart
         .draw_series(
-            map.triangles
+            map.cells
                 .iter()
                 .zip(&map.values)
-                .map(|(t, &v)| Polygon::new(t.to_vec(), fill(v).filled())),
+                .map(|(t, &v)| Polygon::new(t.clone(), fill(v).filled())),
         )
         .map_err(|e| e.to_string())?;
 

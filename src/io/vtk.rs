@@ -1,9 +1,10 @@
-//! ParaView output: `.vtu` frames of the triangulated sheet and a `.pvd` collection that
+//! ParaView output: `.vtu` frames of the meshed sheet and a `.pvd` collection that
 //! strings them into a time series.
 //!
 //! Files are VTK XML `UnstructuredGrid` (version 1.0, little-endian, `UInt64` headers) with
 //! every array inline as base64 binary: exact `Float64` values, a third smaller than ASCII,
-//! and read by ParaView and VTK as they are. Triangles are cell type 5 (`VTK_TRIANGLE`).
+//! and read by ParaView and VTK as they are. Triangles are cell type 5 (`VTK_TRIANGLE`),
+//! quadrilaterals cell type 9 (`VTK_QUAD`).
 //!
 //! The writer is hand-written rather than taken from the `vtkio` crate: its newest stable
 //! release (0.6.3) depends on `nom` 3 and `quick-xml` 0.22, which Rust already warns "will be
@@ -15,11 +16,14 @@
 //! either the old file or the new one, never half of one; a write that fails (a full disk)
 //! removes its temporary file.
 
+use crate::mesh::Cell;
 use std::fmt::{self, Display, Write as _};
 use std::path::{Path, PathBuf};
 
 /// `VTK_TRIANGLE` in the VTK cell type table.
 const VTK_TRIANGLE: u8 = 5;
+/// `VTK_QUAD` in the VTK cell type table.
+const VTK_QUAD: u8 = 9;
 
 /// Values of one field, per point or per cell.
 #[derive(Clone, Debug, PartialEq)]
@@ -81,16 +85,16 @@ pub struct Field {
     pub data: FieldData,
 }
 
-/// One frame of a triangulated sheet.
+/// One frame of a meshed sheet.
 #[derive(Clone, Copy, Debug)]
 pub struct VtuFrame<'a> {
     pub points: &'a [[f64; 3]],
-    pub triangles: &'a [[usize; 3]],
+    pub cells: &'a [Cell],
     pub point_data: &'a [Field],
     pub cell_data: &'a [Field],
 }
 
-/// Whether a value belongs to a point or to a cell (a triangle).
+/// Whether a value belongs to a point or to a cell (an element).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Location {
     Point,
@@ -141,9 +145,7 @@ pub enum VtkError {
         code: u32,
         codes: usize,
     },
-    #[error(
-        "triangles: triangle {triangle} uses point {point}, but the sheet has {points} points"
-    )]
+    #[error("cells: cell {triangle} uses point {point}, but the sheet has {points} points")]
     TriangleIndex {
         triangle: usize,
         point: usize,
@@ -264,10 +266,10 @@ fn vtu_document(frame: &VtuFrame) -> Result<String, VtkError> {
         out,
         "<Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">",
         frame.points.len(),
-        frame.triangles.len()
+        frame.cells.len()
     );
     push_points(&mut out, frame.points);
-    push_cells(&mut out, frame.triangles);
+    push_cells(&mut out, frame.cells);
     push_fields(&mut out, "PointData", frame.point_data);
     push_fields(&mut out, "CellData", frame.cell_data);
     out.push_str("</Piece>\n</UnstructuredGrid>\n</VTKFile>\n");
@@ -277,14 +279,14 @@ fn vtu_document(frame: &VtuFrame) -> Result<String, VtkError> {
 /// Everything that would make a file ParaView misreads, or a panic here.
 fn check_frame(frame: &VtuFrame) -> Result<(), VtkError> {
     check_finite("points", Location::Point, 3, frame.points.as_flattened())?;
-    check_triangles(frame.triangles, frame.points.len())?;
+    check_cells(frame.cells, frame.points.len())?;
     check_fields(frame.point_data, Location::Point, frame.points.len())?;
-    check_fields(frame.cell_data, Location::Cell, frame.triangles.len())
+    check_fields(frame.cell_data, Location::Cell, frame.cells.len())
 }
 
-fn check_triangles(triangles: &[[usize; 3]], points: usize) -> Result<(), VtkError> {
-    for (triangle, corners) in triangles.iter().enumerate() {
-        if let Some(&point) = corners.iter().find(|&&p| p >= points) {
+fn check_cells(cells: &[Cell], points: usize) -> Result<(), VtkError> {
+    for (triangle, corners) in cells.iter().enumerate() {
+        if let Some(&point) = corners.nodes().iter().find(|&&p| p >= points) {
             return Err(VtkError::TriangleIndex {
                 triangle,
                 point,
@@ -364,17 +366,26 @@ fn push_points(out: &mut String, points: &[[f64; 3]]) {
     out.push_str("</Points>\n");
 }
 
-/// Connectivity, end offsets (3, 6, 9, ...) and cell types, as VTK lays out cells.
-fn push_cells(out: &mut String, triangles: &[[usize; 3]]) {
-    let connectivity: Vec<u8> = triangles
-        .as_flattened()
+/// Connectivity, end offsets (3, 6, 9, ... for triangles) and cell types, as VTK lays out
+/// cells.
+fn push_cells(out: &mut String, cells: &[Cell]) {
+    let connectivity: Vec<u8> = cells
         .iter()
+        .flat_map(|c| c.nodes().iter())
         .flat_map(|&p| (p as i64).to_le_bytes())
         .collect();
-    let offsets: Vec<u8> = (1..=triangles.len() as i64)
-        .flat_map(|c| (3 * c).to_le_bytes())
+    let offsets: Vec<u8> = cells
+        .iter()
+        .scan(0i64, |end, c| {
+            *end += c.nodes().len() as i64;
+            Some(*end)
+        })
+        .flat_map(|end| end.to_le_bytes())
         .collect();
-    let types = vec![VTK_TRIANGLE; triangles.len()];
+    let types: Vec<u8> = cells
+        .iter()
+        .map(|c| if c.is_quad() { VTK_QUAD } else { VTK_TRIANGLE })
+        .collect();
     out.push_str("<Cells>\n");
     push_data_array(out, "Int64", "connectivity", 1, &[], &connectivity);
     push_data_array(out, "Int64", "offsets", 1, &[], &offsets);
@@ -536,7 +547,7 @@ mod tests {
     fn frame_with(point_data: &[Field]) -> Result<String, VtkError> {
         vtu_document(&VtuFrame {
             points: &[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
-            triangles: &[[0, 1, 2]],
+            cells: &[Cell::Triangle([0, 1, 2])],
             point_data,
             cell_data: &[],
         })

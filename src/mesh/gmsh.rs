@@ -11,7 +11,7 @@
 //! byte (binary data).
 
 use super::file::split_quadrilateral;
-use super::{Mesh, MeshError, MeshFileError, MeshImport};
+use super::{Cell, Mesh, MeshError, MeshFileError, MeshImport};
 use nalgebra::Vector3;
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::fmt::Write as _;
@@ -1209,7 +1209,7 @@ impl RawFile {
         let rigid = vec![false; triangles.len()];
         let mesh = Mesh {
             nodes,
-            triangles,
+            cells: triangles.into_iter().map(Cell::Triangle).collect(),
             node_sets,
             element_sets,
             warp_directions: None,
@@ -1288,7 +1288,7 @@ fn number(x: f64) -> String {
 
 fn msh_text(mesh: &Mesh) -> String {
     let mut s = String::new();
-    let triangle_count = mesh.triangles.len();
+    let triangle_count = mesh.cells.len();
     // surface entities: one per distinct combination of element sets
     let element_names: Vec<&String> = mesh.element_sets.keys().collect();
     let mut membership: Vec<Vec<usize>> = vec![Vec::new(); triangle_count];
@@ -1322,8 +1322,10 @@ fn msh_text(mesh: &Mesh) -> String {
             let Some(elements) = mesh.element_sets.get(*name) else {
                 return true;
             };
-            let mut derived: Vec<usize> =
-                elements.iter().flat_map(|&t| mesh.triangles[t]).collect();
+            let mut derived: Vec<usize> = elements
+                .iter()
+                .flat_map(|&t| mesh.cells[t].nodes().to_vec())
+                .collect();
             derived.sort_unstable();
             derived.dedup();
             derived != **members
@@ -1369,7 +1371,7 @@ fn msh_text(mesh: &Mesh) -> String {
     ];
     for (t, &e) in triangle_entity.iter().enumerate() {
         let (lo, hi) = &mut boxes[e - 1];
-        for &n in &mesh.triangles[t] {
+        for &n in mesh.cells[t].nodes() {
             *lo = lo.inf(&mesh.nodes[n]);
             *hi = hi.sup(&mesh.nodes[n]);
         }
@@ -1404,10 +1406,11 @@ fn msh_text(mesh: &Mesh) -> String {
     }
     s.push_str("$EndNodes\n");
 
-    // runs of consecutive triangles on the same entity, then the point groups
-    let mut runs: Vec<(usize, usize)> = Vec::new(); // (entity, first triangle)
+    // runs of consecutive cells of one kind on the same entity, then the point groups
+    let mut runs: Vec<(usize, usize)> = Vec::new(); // (entity, first cell)
     for (t, &e) in triangle_entity.iter().enumerate() {
-        if runs.last().map(|r| r.0) != Some(e) {
+        let same_kind = |r: &(usize, usize)| mesh.cells[r.1].is_quad() == mesh.cells[t].is_quad();
+        if runs.last().map(|r| r.0) != Some(e) || !runs.last().is_some_and(same_kind) {
             runs.push((e, t));
         }
     }
@@ -1420,10 +1423,16 @@ fn msh_text(mesh: &Mesh) -> String {
     );
     for (r, &(entity, start)) in runs.iter().enumerate() {
         let end = runs.get(r + 1).map_or(triangle_count, |next| next.1);
-        let _ = writeln!(s, "2 {entity} 2 {}", end - start);
+        // Gmsh element types: 2 the 3-node triangle, 3 the 4-node quadrangle
+        let kind = if mesh.cells[start].is_quad() { 3 } else { 2 };
+        let _ = writeln!(s, "2 {entity} {kind} {}", end - start);
         for t in start..end {
-            let [a, b, c] = mesh.triangles[t];
-            let _ = writeln!(s, "{} {} {} {}", t + 1, a + 1, b + 1, c + 1);
+            let labels: Vec<String> = mesh.cells[t]
+                .nodes()
+                .iter()
+                .map(|n| (n + 1).to_string())
+                .collect();
+            let _ = writeln!(s, "{} {}", t + 1, labels.join(" "));
         }
     }
     let mut tag = triangle_count;

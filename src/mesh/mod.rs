@@ -1,11 +1,15 @@
-//! Meshes of the blank: reference node positions, 3-node triangles, named node and element
-//! sets, and where a mesh file gives them, reference warp directions per triangle.
+//! Meshes of the blank: reference node positions, cells (3-node triangles and 4-node
+//! quadrilaterals), named node and element sets, and where a mesh file gives them, reference
+//! warp directions per cell.
 
 pub mod abaqus;
+pub mod cell;
 pub mod file;
 pub mod gmsh;
 pub mod orientation;
 pub mod rectangle;
+
+pub use cell::Cell;
 
 pub use file::{read_mesh_file, MeshFileError, MeshImport};
 pub use rectangle::{rectangle, DiagonalPattern};
@@ -13,19 +17,20 @@ pub use rectangle::{rectangle, DiagonalPattern};
 use nalgebra::Vector3;
 use std::collections::BTreeMap;
 
-/// A triangulated sheet in its reference configuration.
+/// A meshed sheet in its reference configuration.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Mesh {
     /// Reference positions (mm).
     pub nodes: Vec<Vector3<f64>>,
-    /// Node indices of each triangle, counter-clockwise about the sheet normal.
-    pub triangles: Vec<[usize; 3]>,
+    /// The cells (triangles and quadrilaterals), corners counter-clockwise about the sheet
+    /// normal.
+    pub cells: Vec<Cell>,
     /// Named groups of nodes for boundary conditions and reactions.
     pub node_sets: BTreeMap<String, Vec<usize>>,
-    /// Named groups of triangles (Abaqus `*ELSET`, Gmsh physical groups).
+    /// Named groups of cells (Abaqus `*ELSET`, Gmsh physical groups).
     pub element_sets: BTreeMap<String, Vec<usize>>,
-    /// Reference direction of the warp per triangle, where the mesh file gives one (Abaqus
-    /// `*ORIENTATION`); it is projected onto each triangle's plane. `None`: the scenario's ply
+    /// Reference direction of the warp per cell, where the mesh file gives one (Abaqus
+    /// `*ORIENTATION`); it is projected onto each cell's plane. `None`: the scenario's ply
     /// angle decides.
     pub warp_directions: Option<Vec<Vector3<f64>>>,
 }
@@ -33,15 +38,15 @@ pub struct Mesh {
 /// What is wrong with a mesh.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum MeshError {
-    #[error("the mesh has no triangles")]
+    #[error("the mesh has no cells")]
     Empty,
-    #[error("triangle {triangle} refers to node {node}, but the mesh has {nodes} nodes")]
+    #[error("element {triangle} refers to node {node}, but the mesh has {nodes} nodes")]
     NodeOutOfRange {
         triangle: usize,
         node: usize,
         nodes: usize,
     },
-    #[error("triangle {triangle} is degenerate (area {area:e} mm^2)")]
+    #[error("element {triangle} is degenerate (area {area:e} mm^2)")]
     Degenerate { triangle: usize, area: f64 },
     #[error("node {node} has a non-finite coordinate")]
     NonFinite { node: usize },
@@ -54,16 +59,16 @@ pub enum MeshError {
         index: usize,
         count: usize,
     },
-    #[error("{count} warp directions for {triangles} triangles")]
+    #[error("{count} warp directions for {triangles} elements")]
     WarpDirectionCount { count: usize, triangles: usize },
-    #[error("triangle {triangle} has a zero or non-finite warp direction")]
+    #[error("element {triangle} has a zero or non-finite warp direction")]
     BadWarpDirection { triangle: usize },
 }
 
 impl Mesh {
     /// Checks indices, coordinates and areas.
     pub fn validate(&self) -> Result<(), MeshError> {
-        if self.triangles.is_empty() {
+        if self.cells.is_empty() {
             return Err(MeshError::Empty);
         }
         if let Some(node) = self
@@ -73,8 +78,8 @@ impl Mesh {
         {
             return Err(MeshError::NonFinite { node });
         }
-        for (triangle, t) in self.triangles.iter().enumerate() {
-            if let Some(&node) = t.iter().find(|&&n| n >= self.nodes.len()) {
+        for (triangle, t) in self.cells.iter().enumerate() {
+            if let Some(&node) = t.nodes().iter().find(|&&n| n >= self.nodes.len()) {
                 return Err(MeshError::NodeOutOfRange {
                     triangle,
                     node,
@@ -82,18 +87,18 @@ impl Mesh {
                 });
             }
             let area = self.area(triangle);
-            let scale = (self.nodes[t[1]] - self.nodes[t[0]]).norm_squared();
-            if area.is_nan() || area <= 1e-12 * scale {
+            let scale = (self.nodes[t.nodes()[1]] - self.nodes[t.nodes()[0]]).norm_squared();
+            if area.is_nan() || area <= 1e-12 * scale || t.is_folded(&self.nodes) {
                 return Err(MeshError::Degenerate { triangle, area });
             }
         }
         check_sets("node", &self.node_sets, self.nodes.len())?;
-        check_sets("element", &self.element_sets, self.triangles.len())?;
+        check_sets("element", &self.element_sets, self.cells.len())?;
         if let Some(directions) = &self.warp_directions {
-            if directions.len() != self.triangles.len() {
+            if directions.len() != self.cells.len() {
                 return Err(MeshError::WarpDirectionCount {
                     count: directions.len(),
-                    triangles: self.triangles.len(),
+                    triangles: self.cells.len(),
                 });
             }
             if let Some(triangle) = directions
@@ -106,31 +111,38 @@ impl Mesh {
         Ok(())
     }
 
-    /// Reference area of triangle `t` (mm^2).
+    /// Reference area of cell `t` (mm^2).
     pub fn area(&self, t: usize) -> f64 {
-        let [a, b, c] = self.triangles[t].map(|n| self.nodes[n]);
-        0.5 * (b - a).cross(&(c - a)).norm()
+        self.cells[t].area(&self.nodes)
     }
 
-    /// Centroid of triangle `t` in the reference configuration.
+    /// Centroid of cell `t` in the reference configuration.
     pub fn centroid(&self, t: usize) -> Vector3<f64> {
-        let [a, b, c] = self.triangles[t].map(|n| self.nodes[n]);
-        (a + b + c) / 3.0
+        self.cells[t].centroid(&self.nodes)
+    }
+
+    /// Whether any cell is a quadrilateral.
+    pub fn has_quads(&self) -> bool {
+        self.cells.iter().any(Cell::is_quad)
     }
 
     /// Total reference area (mm^2).
     pub fn total_area(&self) -> f64 {
-        (0..self.triangles.len()).map(|t| self.area(t)).sum()
+        (0..self.cells.len()).map(|t| self.area(t)).sum()
     }
 
-    /// Element size of a mesh made elsewhere (mm): the mean of `sqrt(2 A)` over the
-    /// triangles, the side of the square cell that two of them make (the rectangle's
-    /// `element_size` for its single diagonals; 0.93 of the side of an equilateral triangle).
+    /// Element size of a mesh made elsewhere (mm): the mean over the cells of the side of the
+    /// square cell they make, `sqrt(A)` for a quadrilateral, `sqrt(2 A)` for a triangle (two of
+    /// them make the square: the rectangle's `element_size` for every pattern but crossed;
+    /// 0.93 of the side of an equilateral triangle).
     pub fn element_size(&self) -> f64 {
-        let sum: f64 = (0..self.triangles.len())
-            .map(|t| (2.0 * self.area(t)).sqrt())
+        let sum: f64 = (0..self.cells.len())
+            .map(|t| {
+                let triangles_per_square = if self.cells[t].is_quad() { 1.0 } else { 2.0 };
+                (triangles_per_square * self.area(t)).sqrt()
+            })
             .sum();
-        sum / self.triangles.len().max(1) as f64
+        sum / self.cells.len().max(1) as f64
     }
 
     /// The triangles of the element set `name`.
@@ -149,7 +161,7 @@ impl Mesh {
         let mut nodes: Vec<usize> = self
             .element_set(name)?
             .iter()
-            .flat_map(|&t| self.triangles[t])
+            .flat_map(|&t| self.cells[t].nodes().to_vec())
             .collect();
         nodes.sort_unstable();
         nodes.dedup();
@@ -163,10 +175,10 @@ impl Mesh {
         let kept = self.element_set(name)?.to_vec();
         let mut new_node = vec![None; self.nodes.len()];
         let mut nodes = Vec::new();
-        let triangles: Vec<[usize; 3]> = kept
+        let cells: Vec<Cell> = kept
             .iter()
             .map(|&t| {
-                self.triangles[t].map(|n| {
+                self.cells[t].map(|n| {
                     *new_node[n].get_or_insert_with(|| {
                         nodes.push(self.nodes[n]);
                         nodes.len() - 1
@@ -174,7 +186,7 @@ impl Mesh {
                 })
             })
             .collect();
-        let mut new_triangle = vec![None; self.triangles.len()];
+        let mut new_triangle = vec![None; self.cells.len()];
         for (i, &t) in kept.iter().enumerate() {
             new_triangle[t] = Some(i);
         }
@@ -199,7 +211,7 @@ impl Mesh {
             .map(|d| kept.iter().map(|&t| d[t]).collect());
         let mesh = Mesh {
             nodes,
-            triangles,
+            cells,
             node_sets,
             element_sets,
             warp_directions,
@@ -266,11 +278,11 @@ mod tests {
         let (sub, kept) = mesh.restricted_to("right").unwrap();
         sub.validate().unwrap();
         assert_eq!(kept, vec![2, 3]);
-        assert_eq!(sub.triangles.len(), 2);
+        assert_eq!(sub.cells.len(), 2);
         assert_eq!(sub.nodes.len(), 4);
         for (t, &old) in kept.iter().enumerate() {
-            let a = sub.triangles[t].map(|n| sub.nodes[n]);
-            let b = mesh.triangles[old].map(|n| mesh.nodes[n]);
+            let a = sub.cells[t].positions(&sub.nodes);
+            let b = mesh.cells[old].positions(&mesh.nodes);
             assert_eq!(a, b);
         }
         assert_eq!(sub.warp_directions.unwrap()[1], Vector3::new(1.0, 3.0, 0.0));

@@ -1,5 +1,5 @@
 //! Fibre directions on a curved or pre-shaped blank: a reference direction projected onto
-//! each triangle's plane (what `element::MembraneTriangle` does), and the triangles where that
+//! each triangle's plane (what `element::MembraneElement` does), and the triangles where that
 //! projection is ill-conditioned, so that a user is warned before the run rather than surprised
 //! by the fibre angles after it.
 
@@ -26,10 +26,9 @@ pub fn reference_warp(reference: Vector3<f64>, ply_angle_deg: f64) -> Vector3<f6
     Rotation3::from_axis_angle(&Vector3::z_axis(), ply_angle_deg.to_radians()) * reference
 }
 
-/// Angle (degrees) between `direction` and the plane of triangle `t`.
+/// Angle (degrees) between `direction` and the plane of element `t`.
 pub fn out_of_plane_angle(mesh: &Mesh, t: usize, direction: &Vector3<f64>) -> f64 {
-    let [a, b, c] = mesh.triangles[t].map(|n| mesh.nodes[n]);
-    let normal = (b - a).cross(&(c - a));
+    let normal = mesh.cells[t].area_vector(&mesh.nodes);
     let sine = (normal.dot(direction) / (normal.norm() * direction.norm())).abs();
     sine.min(1.0).asin().to_degrees()
 }
@@ -37,7 +36,7 @@ pub fn out_of_plane_angle(mesh: &Mesh, t: usize, direction: &Vector3<f64>) -> f6
 /// The triangles of `mesh` whose warp direction (the mesh's own where it has them, `reference`
 /// otherwise) lies more than [`POOR_PROJECTION_DEG`] out of their plane, worst first.
 pub fn poor_projections(mesh: &Mesh, reference: &Vector3<f64>) -> Vec<PoorProjection> {
-    let mut poor: Vec<PoorProjection> = (0..mesh.triangles.len())
+    let mut poor: Vec<PoorProjection> = (0..mesh.cells.len())
         .filter_map(|t| {
             let direction = mesh.warp_directions.as_ref().map_or(*reference, |d| d[t]);
             let angle = out_of_plane_angle(mesh, t, &direction);
@@ -91,7 +90,7 @@ mod tests {
     fn out_of_plane_angle_is_the_fold_angle_for_a_direction_across_the_fold() {
         let mesh = folded(70.0);
         let x = Vector3::x();
-        let angles: Vec<f64> = (0..mesh.triangles.len())
+        let angles: Vec<f64> = (0..mesh.cells.len())
             .map(|t| out_of_plane_angle(&mesh, t, &x))
             .collect();
         for (t, &a) in angles.iter().enumerate() {
@@ -100,9 +99,7 @@ mod tests {
             assert!((a - expected).abs() < 1e-9, "triangle {t}: {a}");
         }
         // along the fold line the projection is perfect on both sides
-        assert!(
-            (0..mesh.triangles.len()).all(|t| out_of_plane_angle(&mesh, t, &Vector3::y()) < 1e-9)
-        );
+        assert!((0..mesh.cells.len()).all(|t| out_of_plane_angle(&mesh, t, &Vector3::y()) < 1e-9));
     }
 
     #[test]
@@ -112,7 +109,7 @@ mod tests {
         assert_eq!(poor.len(), 2);
         assert!(poor.iter().all(|p| mesh.centroid(p.triangle).x > 0.0));
         assert!(poor_projections(&folded(50.0), &Vector3::x()).is_empty());
-        let line = describe_poor_projections(&poor, mesh.triangles.len()).unwrap();
+        let line = describe_poor_projections(&poor, mesh.cells.len()).unwrap();
         assert!(
             line.contains("2 of 4 triangles") && line.contains("70.0°"),
             "{line}"
@@ -123,7 +120,7 @@ mod tests {
     #[test]
     fn the_mesh_s_own_directions_take_precedence() {
         let mut mesh = folded(70.0);
-        mesh.warp_directions = Some(vec![Vector3::y(); mesh.triangles.len()]);
+        mesh.warp_directions = Some(vec![Vector3::y(); mesh.cells.len()]);
         assert!(poor_projections(&mesh, &Vector3::x()).is_empty());
     }
 

@@ -1,13 +1,16 @@
-//! Structured triangulation of a rectangular blank centred on the origin in the x–y plane.
+//! Structured mesh of a rectangular blank centred on the origin in the x–y plane.
 
-use super::Mesh;
+use super::{Cell, Mesh};
 use nalgebra::Vector3;
 use std::collections::BTreeMap;
 
-/// How each rectangular cell is cut into triangles.
+/// How each rectangular cell is meshed: kept whole, or cut into triangles.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum DiagonalPattern {
+    /// No diagonal: one 4-node quadrilateral per cell, edges along x and y. Free of the
+    /// preferred fold lines of the triangles (docs/model.md §4).
+    Quad,
     /// One diagonal per cell, all the same way (`/`): cheap, but has a preferred direction.
     Right,
     /// One diagonal per cell, alternating like a chessboard (`/\`, union-jack pattern).
@@ -36,7 +39,7 @@ pub fn rectangle(width: f64, length: f64, nx: usize, ny: usize, pattern: Diagona
             )
         })
         .collect();
-    let mut triangles = Vec::with_capacity(4 * nx * ny);
+    let mut cells = Vec::with_capacity(4 * nx * ny);
     for j in 0..ny {
         for i in 0..nx {
             let (a, b, c, d) = (
@@ -45,23 +48,26 @@ pub fn rectangle(width: f64, length: f64, nx: usize, ny: usize, pattern: Diagona
                 grid(i + 1, j + 1),
                 grid(i, j + 1),
             );
-            match pattern {
-                DiagonalPattern::Right => triangles.extend([[a, b, c], [a, c, d]]),
-                DiagonalPattern::Alternating if (i + j) % 2 == 1 => {
-                    triangles.extend([[a, b, d], [b, c, d]])
+            let triangles: Vec<[usize; 3]> = match pattern {
+                DiagonalPattern::Quad => {
+                    cells.push(Cell::Quad([a, b, c, d]));
+                    Vec::new()
                 }
-                DiagonalPattern::Alternating => triangles.extend([[a, b, c], [a, c, d]]),
+                DiagonalPattern::Right => vec![[a, b, c], [a, c, d]],
+                DiagonalPattern::Alternating if (i + j) % 2 == 1 => vec![[a, b, d], [b, c, d]],
+                DiagonalPattern::Alternating => vec![[a, b, c], [a, c, d]],
                 DiagonalPattern::Crossed => {
                     let centre = nodes.len();
                     nodes.push((nodes[a] + nodes[c]) * 0.5);
-                    triangles.extend([
+                    vec![
                         [a, b, centre],
                         [b, c, centre],
                         [c, d, centre],
                         [d, a, centre],
-                    ]);
+                    ]
                 }
-            }
+            };
+            cells.extend(triangles.into_iter().map(Cell::Triangle));
         }
     }
     let row = |j: usize| (0..=nx).map(|i| grid(i, j)).collect::<Vec<_>>();
@@ -75,7 +81,7 @@ pub fn rectangle(width: f64, length: f64, nx: usize, ny: usize, pattern: Diagona
     ]);
     Mesh {
         nodes,
-        triangles,
+        cells,
         node_sets,
         element_sets: BTreeMap::new(),
         warp_directions: None,
@@ -89,18 +95,21 @@ mod tests {
     #[test]
     fn every_pattern_tiles_the_rectangle_exactly() {
         for pattern in [
+            DiagonalPattern::Quad,
             DiagonalPattern::Right,
             DiagonalPattern::Alternating,
             DiagonalPattern::Crossed,
         ] {
             let mesh = rectangle(150.0, 450.0, 6, 18, pattern);
             mesh.validate().unwrap();
-            let total: f64 = (0..mesh.triangles.len()).map(|t| mesh.area(t)).sum();
+            let total: f64 = (0..mesh.cells.len()).map(|t| mesh.area(t)).sum();
             assert!((total - 150.0 * 450.0).abs() < 1e-8, "{pattern:?}: {total}");
+            assert!(
+                (mesh.element_size() - 25.0).abs() < 1e-9 || pattern == DiagonalPattern::Crossed
+            );
             // counter-clockwise about +z
-            for t in &mesh.triangles {
-                let [a, b, c] = t.map(|n| mesh.nodes[n]);
-                assert!((b - a).cross(&(c - a)).z > 0.0, "{pattern:?}");
+            for t in &mesh.cells {
+                assert!(t.area_vector(&mesh.nodes).z > 0.0, "{pattern:?}");
             }
             assert_eq!(mesh.node_set("top").unwrap().len(), 7);
             assert!(mesh

@@ -5,8 +5,8 @@
 use super::explicit::{rest_kinematics, SolverSettings};
 use super::model::Model;
 use crate::contact::NodeContact;
-use crate::element::bending_triangle::BendingTriangle;
-use crate::element::MembraneTriangle;
+use crate::element::bending::BendingPatch;
+use crate::element::MembraneElement;
 use crate::material::{LaminateState, MembraneResponse};
 use nalgebra::Vector3;
 
@@ -98,7 +98,7 @@ pub fn run_memory(size: &RunSize) -> f64 {
 pub fn item_bytes(layers: usize, bending: bool, tools: usize) -> (f64, f64, f64) {
     let v3 = size_of::<Vector3<f64>>();
     let per_element = size_of::<[usize; 3]>()
-        + size_of::<MembraneTriangle>()
+        + size_of::<MembraneElement>()
         + size_of::<MembraneResponse>()
         + size_of::<LaminateState>()
         + 2 * heap(layers * size_of::<f64>())
@@ -111,7 +111,7 @@ pub fn item_bytes(layers: usize, bending: bool, tools: usize) -> (f64, f64, f64)
         + 30 * size_of::<f64>();
     // a bending patch per element: its triangle and 1-ring, about 12 nodes
     let patch_nodes = 12;
-    let per_patch = size_of::<BendingTriangle>()
+    let per_patch = size_of::<BendingPatch>()
         + heap(patch_nodes * size_of::<usize>())
         + heap(patch_nodes * v3)
         + patch_nodes * (v3 + 2 * size_of::<usize>());
@@ -149,7 +149,7 @@ pub fn rest_step(model: &Model, settings: &SolverSettings) -> Result<(f64, f64),
         let mut element_step = e.altitude * (model.density / modulus).sqrt();
         if let Some(bending) = &model.bending {
             element_step = element_step
-                .min(bending.stable_step(&bending.triangles[k], model.density * thickness));
+                .min(bending.stable_step(&bending.patches[k], model.density * thickness));
         }
         let mass = model.density * thickness * e.area;
         physical += mass;

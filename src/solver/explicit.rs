@@ -127,7 +127,7 @@ pub enum SolverError {
 /// What the element loop returns per element.
 #[derive(Clone, Copy, Debug, Default)]
 struct ElementResult {
-    forces: [Vector3<f64>; 3],
+    forces: [Vector3<f64>; 4],
     stable_step: f64,
     /// Power taken by the yarn-rate damping (N·mm/s).
     damping_power: f64,
@@ -413,13 +413,13 @@ fn elastic_energy(model: &Model, state: &State) -> Result<f64, (usize, MaterialE
                 .laminate
                 .stored_energy(&kin, &state.laminate_states[k])
                 .map_err(|err| (k, err))?;
-            Ok(e.area * w)
+            Ok(e.area * w + e.hourglass_energy(&state.positions, model.hourglass_stiffness))
         })
         .collect();
     let membrane: f64 = membrane.into_iter().sum::<Result<f64, _>>()?;
     let bending: f64 = model.bending.as_ref().map_or(0.0, |b| {
         let energies: Vec<f64> = b
-            .triangles
+            .patches
             .par_iter()
             .map(|t| b.energy(t, &state.positions))
             .collect();
@@ -455,7 +455,7 @@ fn fastest_element(model: &Model, state: &State) -> usize {
     model
         .elements
         .iter()
-        .position(|e| e.nodes.contains(&node))
+        .position(|e| e.nodes().contains(&node))
         .unwrap_or(0)
 }
 
@@ -541,13 +541,13 @@ pub struct InternalForces {
 impl InternalForces {
     pub fn new(model: &Model) -> Self {
         let nodes = model.mesh.nodes.len();
-        let patches = model.bending.as_ref().map_or(&[][..], |b| &b.triangles[..]);
+        let patches = model.bending.as_ref().map_or(&[][..], |b| &b.patches[..]);
         let mut patch_offsets = vec![0];
         for t in patches {
             patch_offsets.push(patch_offsets[patch_offsets.len() - 1] + t.nodes.len());
         }
         Self {
-            adjacency: NodeElements::new(nodes, model.elements.iter().map(|e| &e.nodes[..])),
+            adjacency: NodeElements::new(nodes, model.elements.iter().map(|e| e.nodes())),
             results: vec![ElementResult::default(); model.elements.len()],
             patch_adjacency: NodeElements::new(nodes, patches.iter().map(|t| &t.nodes[..])),
             patch_forces: vec![Vector3::zeros(); patch_offsets[patch_offsets.len() - 1]],
@@ -595,7 +595,7 @@ fn bending_loop(
     let thickness = model.laminate.reference_thickness();
     split_at_offsets(forces, offsets)
         .into_par_iter()
-        .zip(bending.triangles.par_iter())
+        .zip(bending.patches.par_iter())
         .zip(state.densities.par_iter())
         .map(|((f, t), rho)| {
             bending.forces(t, &state.positions, f);
@@ -623,7 +623,7 @@ fn split_at_offsets<'a>(
 fn bending_steps(model: &Model, bending: &Bending, densities: &[f64]) -> Vec<f64> {
     let thickness = model.laminate.reference_thickness();
     bending
-        .triangles
+        .patches
         .iter()
         .zip(densities)
         .map(|(t, rho)| bending.stable_step(t, rho * thickness))
@@ -664,8 +664,9 @@ impl State {
         }
         let mut masses = vec![0.0; n_nodes];
         for (e, rho) in model.elements.iter().zip(&densities) {
-            for &n in &e.nodes {
-                masses[n] += rho * thickness * e.area / 3.0;
+            let share = rho * thickness * e.area / e.nodes().len() as f64;
+            for &n in e.nodes() {
+                masses[n] += share;
             }
         }
         Ok(State {
@@ -753,6 +754,7 @@ fn element_loop(
                 let (n_damping, power) =
                     yarn_damping_resultant(&kin, xi, element_step, modulus, thickness);
                 result.forces = e.internal_forces(&f, &(response.n + n_damping));
+                e.hourglass_forces(positions, model.hourglass_stiffness, &mut result.forces);
                 let xi_total = xi + material_damping_ratio(viscosity, modulus, element_step);
                 result.stable_step = element_step * step_reduction(xi_total);
                 result.damping_power = power * e.area;

@@ -1,9 +1,9 @@
 //! What the solver integrates: the meshed sheet, its laminate, and the constraints.
 
 use crate::contact::{ContactSettings, RigidTool};
-use crate::element::bending_triangle::BendingError;
-use crate::element::membrane_triangle::ElementError;
-use crate::element::{Bending, BendingRigidity, MembraneTriangle};
+use crate::element::bending::BendingError;
+use crate::element::membrane::ElementError;
+use crate::element::{Bending, BendingRigidity, MembraneElement};
 use crate::material::Laminate;
 use crate::mesh::{Mesh, MeshError};
 use nalgebra::Vector3;
@@ -46,13 +46,16 @@ pub struct Constraint {
 #[derive(Clone, Debug)]
 pub struct Model {
     pub mesh: Mesh,
-    pub elements: Vec<MembraneTriangle>,
+    pub elements: Vec<MembraneElement>,
     /// Bending stiffness; `None` for a membrane.
     pub bending: Option<Bending>,
     /// Rigid tools in contact with the blank, and how the contact is computed.
     pub tools: Vec<RigidTool>,
     pub contact: ContactSettings,
     pub laminate: Laminate,
+    /// In-plane shear stiffness of the laminate at rest, `G t0` (N/mm): what holds the
+    /// hourglass mode of the quadrilaterals ([`MembraneElement::hourglass_forces`]).
+    pub hourglass_stiffness: f64,
     /// Density of the ply (tonne/mm^3).
     pub density: f64,
     /// Isothermal temperature of the run (°C).
@@ -79,10 +82,12 @@ pub enum ModelError {
         node: usize,
         nodes: usize,
     },
-    #[error("node {0} belongs to no triangle: it would have no mass")]
+    #[error("node {0} belongs to no element: it would have no mass")]
     OrphanNode(usize),
     #[error("density {0} must be > 0")]
     Density(f64),
+    #[error("laminate at the run's temperature: {0}")]
+    Material(String),
     #[error("bending: {0}")]
     Bending(#[from] BendingError),
 }
@@ -104,27 +109,36 @@ impl Model {
             return Err(ModelError::Density(density));
         }
         let elements = mesh
-            .triangles
+            .cells
             .iter()
             .enumerate()
-            .map(|(element, &nodes)| {
+            .map(|(element, &cell)| {
                 let warp = mesh
                     .warp_directions
                     .as_ref()
                     .map_or(warp_direction, |d| d[element]);
-                MembraneTriangle::new(nodes, nodes.map(|n| mesh.nodes[n]), &warp)
+                MembraneElement::new(cell, &mesh.nodes, &warp)
                     .map_err(|error| ModelError::Element { element, error })
             })
             .collect::<Result<Vec<_>, _>>()?;
         let mut used = vec![false; mesh.nodes.len()];
-        for t in &mesh.triangles {
-            for &n in t {
+        for t in &mesh.cells {
+            for &n in t.nodes() {
                 used[n] = true;
             }
         }
         if let Some(node) = used.iter().position(|u| !u) {
             return Err(ModelError::OrphanNode(node));
         }
+        let hourglass_stiffness = match mesh.has_quads() {
+            true => {
+                laminate
+                    .shear_modulus(temperature)
+                    .map_err(|e| ModelError::Material(e.to_string()))?
+                    * laminate.reference_thickness()
+            }
+            false => 0.0,
+        };
         let mut owner: Vec<Option<usize>> = vec![None; mesh.nodes.len()];
         for (c, constraint) in constraints.iter().enumerate() {
             for &node in &constraint.nodes {
@@ -155,6 +169,7 @@ impl Model {
                 penalty_scale: 0.1,
                 max_penetration: laminate.reference_thickness(),
             },
+            hourglass_stiffness,
             // The run is isothermal: the laws' temperature tables are interpolated once here.
             laminate: laminate.at_temperature(temperature),
             density,
@@ -164,7 +179,7 @@ impl Model {
     }
 
     /// The same sheet with bending stiffness: a rotation-free bending patch per triangle
-    /// (docs/model.md §4, `element::bending_triangle`), the reference mesh's curvature at rest.
+    /// (docs/model.md §4, `element::bending`), the reference mesh's curvature at rest.
     pub fn with_bending(mut self, rigidity: BendingRigidity) -> Result<Self, ModelError> {
         self.bending = Some(Bending::new(&self.mesh, &self.elements, rigidity)?);
         Ok(self)
@@ -177,12 +192,12 @@ impl Model {
         self
     }
 
-    /// A third of the reference area of each triangle at each of its nodes (mm^2).
+    /// An equal share of the reference area of each element at each of its corners (mm^2).
     pub fn nodal_areas(&self) -> Vec<f64> {
         let mut area = vec![0.0; self.mesh.nodes.len()];
         for e in &self.elements {
-            for &n in &e.nodes {
-                area[n] += e.area / 3.0;
+            for &n in e.nodes() {
+                area[n] += e.area / e.nodes().len() as f64;
             }
         }
         area

@@ -1,4 +1,4 @@
-//! A mesh as an Abaqus deck that CalculiX reads as well: nodes, S3 elements, sets, and per
+//! A mesh as an Abaqus deck that CalculiX reads as well: nodes, S3 and S4R elements, sets, and per
 //! element the warp direction (an orientation) and the thickness (a shell section).
 
 use crate::mesh::{Mesh, MeshFileError};
@@ -8,7 +8,7 @@ use std::fmt::Write as _;
 use std::io::Write;
 use std::path::Path;
 
-/// Per triangle, what a forming run gives a structural analysis: the current warp direction
+/// Per element, what a forming run gives a structural analysis: the current warp direction
 /// (any length; written as the local 1-axis of the element's material orientation) and the
 /// current thickness (mm).
 #[derive(Clone, Debug, PartialEq)]
@@ -110,7 +110,7 @@ pub fn write_inp_to<W: Write>(
     let error = |message: String| MeshFileError::in_file(file, message);
     mesh.validate()
         .map_err(|e| error(format!("the mesh is not valid: {e}")))?;
-    let count = mesh.triangles.len();
+    let count = mesh.cells.len();
     let warp: Option<&[Vector3<f64>]> = match elements {
         Some(e) => Some(&e.warp),
         None => mesh.warp_directions.as_deref(),
@@ -130,7 +130,7 @@ pub fn write_inp_to<W: Write>(
             .position(|t| !(t.is_finite() && *t > 0.0))
         {
             return Err(error(format!(
-                "triangle {t}: thickness {} is not positive",
+                "element {t}: thickness {} is not positive",
                 e.thickness[t]
             )));
         }
@@ -175,9 +175,20 @@ pub fn write_inp_to<W: Write>(
     for (n, x) in mesh.nodes.iter().enumerate() {
         let _ = writeln!(text, "{}, {}", n + 1, numbers(&[x.x, x.y, x.z]));
     }
-    text.push_str("*ELEMENT, TYPE=S3\n");
-    for (t, [a, b, c]) in mesh.triangles.iter().enumerate() {
-        let _ = writeln!(text, "{}, {}, {}, {}", t + 1, a + 1, b + 1, c + 1);
+    for (kind, quads) in [("S3", false), ("S4R", true)] {
+        let mut block = mesh
+            .cells
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| c.is_quad() == quads)
+            .peekable();
+        if block.peek().is_some() {
+            let _ = writeln!(text, "*ELEMENT, TYPE={kind}");
+        }
+        for (t, cell) in block {
+            let labels: Vec<String> = cell.nodes().iter().map(|n| (n + 1).to_string()).collect();
+            let _ = writeln!(text, "{}, {}", t + 1, labels.join(", "));
+        }
     }
     for (name, members) in node_sets.iter().map(|(n, s)| (n, &mesh.node_sets[*s])) {
         let _ = writeln!(text, "*NSET, NSET={name}");
@@ -218,21 +229,19 @@ fn write_sections(
              each\n** *SHELL SECTION."
         );
     }
-    for (t, &[p, q, r]) in mesh.triangles.iter().enumerate() {
+    for (t, cell) in mesh.cells.iter().enumerate() {
         let label = t + 1;
         let _ = writeln!(text, "*ELSET, ELSET={SECTION_SET_PREFIX}{label}\n{label}");
         let mut section =
             format!("*SHELL SECTION, ELSET={SECTION_SET_PREFIX}{label}, MATERIAL={MATERIAL_NAME}");
         if let Some(given) = warp.map(|w| w[t]) {
-            let normal = (mesh.nodes[q] - mesh.nodes[p])
-                .cross(&(mesh.nodes[r] - mesh.nodes[p]))
-                .normalize();
+            let normal = cell.area_vector(&mesh.nodes).normalize();
             // unit axes: a direction of any length is written (and read back) alike
             let a = (given / given.amax()).normalize();
             let b = normal.cross(&a);
             if !(given.iter().all(|c| c.is_finite()) && b.norm() > 1e-10) {
                 return Err(format!(
-                    "triangle {t}: warp direction {given:?} is zero, not finite or normal to \
+                    "element {t}: warp direction {given:?} is zero, not finite or normal to \
                      the triangle"
                 ));
             }

@@ -8,7 +8,7 @@ use super::super::AbaqusMesh;
 use super::lookup::{IndexSet, Resolved, Use};
 use super::{supported_types, Axes, Model, Thickness, ELEMENT_TYPES};
 use crate::mesh::file::split_quadrilateral;
-use crate::mesh::{Mesh, MeshError, MeshFileError, MeshImport};
+use crate::mesh::{Cell, Mesh, MeshError, MeshFileError, MeshImport};
 use nalgebra::Vector3;
 use std::collections::{BTreeMap, HashMap, HashSet};
 use std::ops::Range;
@@ -148,10 +148,10 @@ impl Model {
         let notes = self.notes(deck, &split);
         let mesh = Mesh {
             nodes: kept.iter().map(|&n| self.nodes[n].position).collect(),
-            triangles: split
+            cells: split
                 .triangles
                 .iter()
-                .map(|t| t.map(|n| new_index[n]))
+                .map(|t| Cell::Triangle(t.map(|n| new_index[n])))
                 .collect(),
             node_sets: mesh_node_sets,
             element_sets: mesh_element_sets,

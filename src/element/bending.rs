@@ -1,6 +1,11 @@
 //! Rotation-free bending of the sheet (docs/model.md §4, bending), in the family of the
 //! rotation-free shell triangles of Phaal & Calladine 1992 and Oñate & Zárate 2000: the
-//! curvature of each triangle is read off the positions of the nodes around it.
+//! curvature of each element is read off the positions of the nodes around it.
+//!
+//! A quadrilateral's curvature is the least-squares quadratic through the heights of its four
+//! corners and every node of its 1-ring (twelve on a structured mesh) **(choice)**: it
+//! reproduces any quadratic surface exactly, sees the cell's own warp (a fold across either
+//! diagonal) as twist, and has no preferred diagonal. The rest of this page is the triangle's.
 //!
 //! The heights of six nodes above a triangle's current plane, `w_i = (x_i - x_0) . n`, are
 //! interpolated by a quadratic in the triangle's reference in-plane coordinates `(X, Y)`, and
@@ -31,7 +36,7 @@
 //! prepregs it is far below `E t^3 / 12` because the yarns slide in the molten matrix.
 //! Forces are `dW/dx` of the patch nodes, including the turn of the triangle's normal.
 
-use super::MembraneTriangle;
+use super::MembraneElement;
 use crate::mesh::Mesh;
 use nalgebra::{Matrix2, Matrix3, Matrix6, Vector2, Vector3};
 use rayon::prelude::*;
@@ -79,16 +84,16 @@ pub enum BendingError {
     #[error("bending rigidity {name} = {value} must be a finite number >= 0 (N·mm)")]
     Rigidity { name: &'static str, value: f64 },
     #[error(
-        "triangle {0}: the nodes around it cannot carry a quadratic (fewer than six, or all on \
+        "element {0}: the nodes around it cannot carry a quadratic (fewer than six, or all on \
          a conic)"
     )]
     SingularPatch(usize),
 }
 
-/// The bending patch of one triangle.
+/// The bending patch of one element.
 #[derive(Clone, Debug, PartialEq)]
-pub struct BendingTriangle {
-    /// Patch nodes: the triangle's three corners first, then its 1-ring.
+pub struct BendingPatch {
+    /// Patch nodes: the element's corners first, then its 1-ring.
     pub nodes: Vec<usize>,
     /// Column `i` of `G`: what the height of patch node `i` adds to `(w_XX, w_YY, w_XY)`.
     pub curvature_operator: Vec<Vector3<f64>>,
@@ -102,11 +107,11 @@ pub struct BendingTriangle {
     pub altitude: f64,
 }
 
-/// The bending stiffness of a sheet: one patch per triangle.
+/// The bending stiffness of a sheet: one patch per element.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Bending {
     pub rigidity: BendingRigidity,
-    pub triangles: Vec<BendingTriangle>,
+    pub patches: Vec<BendingPatch>,
 }
 
 impl Bending {
@@ -114,38 +119,30 @@ impl Bending {
     /// directions), with the reference curvature of the mesh as rest state.
     pub fn new(
         mesh: &Mesh,
-        elements: &[MembraneTriangle],
+        elements: &[MembraneElement],
         rigidity: BendingRigidity,
     ) -> Result<Self, BendingError> {
         rigidity.validate()?;
         check_manifold(mesh)?;
         let around = triangles_around_nodes(mesh);
-        let patches: Vec<Option<BendingTriangle>> = elements
+        let patches: Vec<Option<BendingPatch>> = elements
             .par_iter()
             .enumerate()
-            .map(|(k, e)| BendingTriangle::new(mesh, e, patch_nodes(mesh, &around, k)))
+            .map(|(k, e)| BendingPatch::new(mesh, e, patch_nodes(mesh, &around, k)))
             .collect();
         // in order, so that of several singular patches the same one is named on any thread
         // count
-        let triangles = patches
+        let patches = patches
             .into_iter()
             .enumerate()
             .map(|(k, t)| t.ok_or(BendingError::SingularPatch(k)))
             .collect::<Result<Vec<_>, _>>()?;
-        Ok(Self {
-            rigidity,
-            triangles,
-        })
+        Ok(Self { rigidity, patches })
     }
 
     /// Bending energy of triangle `t` (N·mm) and its forces `dW/dx` on its patch nodes,
     /// written to `forces` (as many as the patch has nodes).
-    pub fn forces(
-        &self,
-        t: &BendingTriangle,
-        x: &[Vector3<f64>],
-        forces: &mut [Vector3<f64>],
-    ) -> f64 {
+    pub fn forces(&self, t: &BendingPatch, x: &[Vector3<f64>], forces: &mut [Vector3<f64>]) -> f64 {
         let frame = CurrentPlane::of(t, x);
         let k = t.curvature(&frame, x) - t.rest_curvature;
         let (energy, dw_dk) = self.energy_and_moments(t, &k);
@@ -165,14 +162,14 @@ impl Bending {
     }
 
     /// Bending energy of triangle `t` (N·mm).
-    pub fn energy(&self, t: &BendingTriangle, x: &[Vector3<f64>]) -> f64 {
+    pub fn energy(&self, t: &BendingPatch, x: &[Vector3<f64>]) -> f64 {
         let frame = CurrentPlane::of(t, x);
         let k = t.curvature(&frame, x) - t.rest_curvature;
         self.energy_and_moments(t, &k).0
     }
 
     /// `A W(k)` and `A dW/dk` for the curvature change `k = (k_XX, k_YY, k_XY)`.
-    fn energy_and_moments(&self, t: &BendingTriangle, k: &Vector3<f64>) -> (f64, Vector3<f64>) {
+    fn energy_and_moments(&self, t: &BendingPatch, k: &Vector3<f64>) -> (f64, Vector3<f64>) {
         let kappa = Matrix2::new(k.x, k.z, k.z, k.y);
         let b = &self.rigidity;
         let (aa, bb, ab) = (
@@ -197,7 +194,7 @@ impl Bending {
     /// smallest altitude); about six patches share a node, so its stiffness is at most about
     /// `6 x 16 B A / h^4` on a lumped mass of at least `m A / 3`: `omega^2 <= 288 B / (m h^4)`,
     /// `dt = 2 / omega` (the buckling test runs with it at a safety of 0.9).
-    pub fn stable_step(&self, t: &BendingTriangle, mass_per_area: f64) -> f64 {
+    pub fn stable_step(&self, t: &BendingPatch, mass_per_area: f64) -> f64 {
         let b = self.rigidity.warp.max(self.rigidity.weft);
         let omega_sq = 288.0 * b / (mass_per_area * t.altitude.powi(4));
         if omega_sq > 0.0 {
@@ -208,18 +205,24 @@ impl Bending {
     }
 }
 
-impl BendingTriangle {
+impl BendingPatch {
     /// The patch of membrane triangle `e` on `nodes` (its corners first); `None` when the
     /// patch admits no unique quadratic (fewer than six nodes, or all on a conic).
-    fn new(mesh: &Mesh, e: &MembraneTriangle, ring: Vec<usize>) -> Option<Self> {
-        let origin = mesh.nodes[e.nodes[0]];
+    fn new(mesh: &Mesh, e: &MembraneElement, ring: Vec<usize>) -> Option<Self> {
+        if e.cell.is_quad() {
+            return Self::least_squares(mesh, e, ring);
+        }
+        // the corners stay among the candidates (never chosen: they would repeat a point), as
+        // the interpolation was first measured
+        let ring: Vec<usize> = e.nodes().iter().copied().chain(ring).collect();
+        let origin = mesh.nodes[e.nodes()[0]];
         // lengths scaled by the altitude, so that the interpolation matrix is of order one
         let scale = e.altitude;
         let local = |n: usize| {
             let d = mesh.nodes[n] - origin;
             Vector2::new(d.dot(&e.basis.column(0)), d.dot(&e.basis.column(1))) / scale
         };
-        let corners = e.nodes.map(local);
+        let corners: [Vector2<f64>; 3] = std::array::from_fn(|a| local(e.nodes()[a]));
         let candidates: Vec<Vector2<f64>> = ring.iter().map(|&n| local(n)).collect();
         let chosen = best_interpolation_points(&corners, &candidates)?;
         let points: [Vector2<f64>; 6] = std::array::from_fn(|i| {
@@ -242,11 +245,55 @@ impl BendingTriangle {
             })
             .collect();
         let nodes = e
-            .nodes
-            .into_iter()
+            .nodes()
+            .iter()
+            .copied()
             .chain(chosen.iter().map(|&c| ring[c]))
             .collect();
-        let mut triangle = Self {
+        Some(Self::at_rest(mesh, e, nodes, curvature_operator))
+    }
+
+    /// The patch of quadrilateral `e`: the least-squares quadratic through its corners and
+    /// its whole 1-ring, `G = (A^T A)^-1 A^T` with `A` the rows `(1, X, Y, X^2, XY, Y^2)`;
+    /// `None` when they admit no unique quadratic.
+    fn least_squares(mesh: &Mesh, e: &MembraneElement, ring: Vec<usize>) -> Option<Self> {
+        let origin = e.cell.centroid(&mesh.nodes);
+        let scale = e.altitude;
+        let nodes: Vec<usize> = e.nodes().iter().copied().chain(ring).collect();
+        let rows: Vec<[f64; 6]> = nodes
+            .iter()
+            .map(|&n| {
+                let d = mesh.nodes[n] - origin;
+                let p = Vector2::new(d.dot(&e.basis.column(0)), d.dot(&e.basis.column(1))) / scale;
+                [1.0, p.x, p.y, p.x * p.x, p.x * p.y, p.y * p.y]
+            })
+            .collect();
+        let a = nalgebra::DMatrix::from_fn(rows.len(), 6, |i, j| rows[i][j]);
+        let smallest = a
+            .clone()
+            .singular_values()
+            .iter()
+            .fold(f64::INFINITY, |m, &v| m.min(v));
+        if !(smallest > SINGULAR) {
+            return None;
+        }
+        let normal = (a.transpose() * &a).try_inverse()? * a.transpose();
+        let s2 = scale * scale;
+        let curvature_operator = (0..nodes.len())
+            .map(|i| Vector3::new(2.0 * normal[(3, i)], 2.0 * normal[(5, i)], normal[(4, i)]) / s2)
+            .collect();
+        Some(Self::at_rest(mesh, e, nodes, curvature_operator))
+    }
+
+    /// The patch on `nodes` with the operator `G`, its rest curvature that of the reference
+    /// mesh.
+    fn at_rest(
+        mesh: &Mesh,
+        e: &MembraneElement,
+        nodes: Vec<usize>,
+        curvature_operator: Vec<Vector3<f64>>,
+    ) -> Self {
+        let mut patch = Self {
             nodes,
             curvature_operator,
             rest_curvature: Vector3::zeros(),
@@ -255,9 +302,9 @@ impl BendingTriangle {
             area: e.area,
             altitude: e.altitude,
         };
-        let frame = CurrentPlane::of(&triangle, &mesh.nodes);
-        triangle.rest_curvature = triangle.curvature(&frame, &mesh.nodes);
-        Some(triangle)
+        let frame = CurrentPlane::of(&patch, &mesh.nodes);
+        patch.rest_curvature = patch.curvature(&frame, &mesh.nodes);
+        patch
     }
 
     /// `G w` for the heights above `frame`.
@@ -282,7 +329,7 @@ struct CurrentPlane {
 }
 
 impl CurrentPlane {
-    fn of(t: &BendingTriangle, x: &[Vector3<f64>]) -> Self {
+    fn of(t: &BendingPatch, x: &[Vector3<f64>]) -> Self {
         let (x0, x1, x2) = (x[t.nodes[0]], x[t.nodes[1]], x[t.nodes[2]]);
         let edges = [x1 - x0, x2 - x0];
         let n = edges[0].cross(&edges[1]);
@@ -359,9 +406,8 @@ const SINGULAR: f64 = 1e-6;
 fn check_manifold(mesh: &Mesh) -> Result<(), BendingError> {
     let mut runs: HashMap<(usize, usize), usize> = HashMap::new();
     let mut uses: HashMap<(usize, usize), usize> = HashMap::new();
-    for (t, tri) in mesh.triangles.iter().enumerate() {
-        for k in 0..3 {
-            let (a, b) = (tri[k], tri[(k + 1) % 3]);
+    for (t, cell) in mesh.cells.iter().enumerate() {
+        for (a, b) in cell.edges() {
             let count = uses.entry((a.min(b), a.max(b))).or_default();
             *count += 1;
             if *count > 2 {
@@ -381,26 +427,30 @@ fn check_manifold(mesh: &Mesh) -> Result<(), BendingError> {
     Ok(())
 }
 
-/// The triangles around each node.
+/// The elements around each node.
 fn triangles_around_nodes(mesh: &Mesh) -> Vec<Vec<usize>> {
     let mut around = vec![Vec::new(); mesh.nodes.len()];
-    for (t, tri) in mesh.triangles.iter().enumerate() {
-        for &n in tri {
+    for (t, cell) in mesh.cells.iter().enumerate() {
+        for &n in cell.nodes() {
             around[n].push(t);
         }
     }
     around
 }
 
-/// Triangle `k`'s corners, then the other nodes of every triangle that touches them, sorted.
+/// The other nodes of every element that touches element `k`'s corners, sorted.
 fn patch_nodes(mesh: &Mesh, around: &[Vec<usize>], k: usize) -> Vec<usize> {
-    let corners = mesh.triangles[k];
+    let corners = mesh.cells[k].nodes();
     let mut ring: Vec<usize> = corners
         .iter()
-        .flat_map(|&c| around[c].iter().flat_map(|&t| mesh.triangles[t]))
+        .flat_map(|&c| {
+            around[c]
+                .iter()
+                .flat_map(|&t| mesh.cells[t].nodes().to_vec())
+        })
         .filter(|n| !corners.contains(n))
         .collect();
     ring.sort_unstable();
     ring.dedup();
-    corners.into_iter().chain(ring).collect()
+    ring
 }
