@@ -8,7 +8,7 @@ use common::*;
 use nalgebra::{Matrix2, Matrix3, Rotation3, Vector3};
 use std::sync::Arc;
 use thermostamp::material::{FibreDirections, Laminate, MembraneKinematics};
-use thermostamp::mesh::{rectangle, DiagonalPattern};
+use thermostamp::mesh::{rectangle, Cell, DiagonalPattern, Mesh};
 use thermostamp::solver::{self, Constraint, Model, Motion, Observer, SolverSettings, State};
 
 /// The T300 ply without matrix viscosity: its response depends on the final F only.
@@ -25,9 +25,42 @@ impl Observer for Last {
     }
 }
 
+/// The meshes of the patch tests: crossed triangles, square quadrilaterals, and
+/// quadrilaterals with their interior nodes moved by up to a fifth of a cell (no two edges
+/// parallel).
+#[derive(Clone, Copy, Debug)]
+enum PatchMesh {
+    Crossed,
+    Quad,
+    DistortedQuad,
+}
+
+const PATCH_MESHES: [PatchMesh; 3] = [
+    PatchMesh::Crossed,
+    PatchMesh::Quad,
+    PatchMesh::DistortedQuad,
+];
+
+fn patch_mesh(kind: PatchMesh) -> Mesh {
+    let pattern = match kind {
+        PatchMesh::Crossed => DiagonalPattern::Crossed,
+        PatchMesh::Quad | PatchMesh::DistortedQuad => DiagonalPattern::Quad,
+    };
+    let mut mesh = rectangle(10.0, 10.0, 4, 4, pattern);
+    if let PatchMesh::DistortedQuad = kind {
+        for (i, p) in mesh.nodes.iter_mut().enumerate() {
+            if p.x.abs() < 4.9 && p.y.abs() < 4.9 {
+                let s = i as f64;
+                *p += Vector3::new(0.5 * (1.7 * s).sin(), 0.5 * (2.3 * s).cos(), 0.0);
+            }
+        }
+    }
+    mesh
+}
+
 /// Every node follows `x = X + t G X` (a 3x3 `G`) with `G X` as constant velocity.
-fn homogeneous_run(g: Matrix3<f64>, end_time: f64, angle: f64) -> (Model, State) {
-    let mesh = rectangle(10.0, 10.0, 4, 4, DiagonalPattern::Crossed);
+fn homogeneous_run(kind: PatchMesh, g: Matrix3<f64>, end_time: f64, angle: f64) -> (Model, State) {
+    let mesh = patch_mesh(kind);
     let all = mesh.node_set("all").unwrap().to_vec();
     let motion = Motion::Velocity(Arc::new(move |_t, x0: &Vector3<f64>| g * x0));
     let warp = Vector3::new(angle.cos(), angle.sin(), 0.0);
@@ -57,12 +90,22 @@ fn homogeneous_run(g: Matrix3<f64>, end_time: f64, angle: f64) -> (Model, State)
     (model, last.0.unwrap())
 }
 
+/// The patch test: a uniform stretch and shear gives every element the material point's
+/// response, leaves the interior nodes in equilibrium and loads the edges with the membrane
+/// traction, on triangles and on square and distorted quadrilaterals (yarns at 23° to the
+/// edges).
 #[test]
 fn homogeneous_deformation_reproduces_the_material_point() {
+    for kind in PATCH_MESHES {
+        homogeneous_patch(kind);
+    }
+}
+
+fn homogeneous_patch(kind: PatchMesh) {
     let g = Matrix3::new(0.005, 0.15, 0.0, 0.02, -0.003, 0.0, 0.0, 0.0, 0.0);
     let end = 1e-4;
     let angle = 0.4;
-    let (model, state) = homogeneous_run(g / end, end, angle);
+    let (model, state) = homogeneous_run(kind, g / end, end, angle);
     let f2 = Matrix2::new(1.0 + g[(0, 0)], g[(0, 1)], g[(1, 0)], 1.0 + g[(1, 1)]);
     let kin = MembraneKinematics {
         c: f2.transpose() * f2,
@@ -83,7 +126,7 @@ fn homogeneous_deformation_reproduces_the_material_point() {
             .into_owned();
         assert!(
             (n - expected.n).amax() < 1e-8 * expected.n.amax(),
-            "element {k}: {n} vs {}",
+            "{kind:?}, element {k}: {n} vs {}",
             expected.n
         );
         assert!((m.thickness - expected.thickness).abs() < 1e-12);
@@ -96,7 +139,10 @@ fn homogeneous_deformation_reproduces_the_material_point() {
         .collect();
     for (node, r) in state.internal_forces.iter().enumerate() {
         if !boundary.contains(&node) {
-            assert!(r.norm() < 1e-9 * scale, "interior node {node}: {r}");
+            assert!(
+                r.norm() < 1e-9 * scale,
+                "{kind:?}, interior node {node}: {r}"
+            );
         }
     }
     // and the boundary tractions are those of the membrane stress: total force on the right
@@ -113,14 +159,14 @@ fn homogeneous_deformation_reproduces_the_material_point() {
     let traction = p * nalgebra::Vector2::new(1.0, 0.0) * 10.0;
     assert!(
         (right - traction).norm() < 1e-6 * traction.norm(),
-        "{right} vs {traction}"
+        "{kind:?}: {right} vs {traction}"
     );
 }
 
 /// Largest spurious yarn strain, N / (t_B A2), after a quarter turn at `safety` x critical step.
-fn spurious_strain_after_rotation(axis: Vector3<f64>, safety: f64) -> f64 {
+fn spurious_strain_after_rotation(kind: PatchMesh, axis: Vector3<f64>, safety: f64) -> f64 {
     let omega = std::f64::consts::FRAC_PI_2 / 1e-4;
-    let mesh = rectangle(10.0, 10.0, 4, 4, DiagonalPattern::Crossed);
+    let mesh = patch_mesh(kind);
     let all = mesh.node_set("all").unwrap().to_vec();
     let motion = Motion::Velocity(Arc::new(move |t, x0: &Vector3<f64>| {
         let x = Rotation3::new(axis * omega * t) * x0;
@@ -165,14 +211,23 @@ fn spurious_strain_after_rotation(axis: Vector3<f64>, safety: f64) -> f64 {
 }
 
 /// A rigid rotation strains nothing, up to the O(dt^2) error of integrating the prescribed
-/// path with midpoint velocities: tiny, and four times smaller at half the step.
+/// path with midpoint velocities: tiny, and four times smaller at half the step; on every
+/// patch mesh (the quadrilaterals' hourglass mode is blind to rotations too).
 #[test]
 fn rigid_rotation_gives_no_stress() {
-    for axis in [Vector3::z(), Vector3::new(1.0, 1.0, 0.0).normalize()] {
-        let coarse = spurious_strain_after_rotation(axis, 0.9);
-        let fine = spurious_strain_after_rotation(axis, 0.45);
-        assert!(coarse < 1e-5, "spurious strain {coarse:e} about {axis}");
-        assert!(fine < 0.35 * coarse, "second order: {coarse:e} -> {fine:e}");
+    for kind in PATCH_MESHES {
+        for axis in [Vector3::z(), Vector3::new(1.0, 1.0, 0.0).normalize()] {
+            let coarse = spurious_strain_after_rotation(kind, axis, 0.9);
+            let fine = spurious_strain_after_rotation(kind, axis, 0.45);
+            assert!(
+                coarse < 1e-5,
+                "{kind:?}: spurious strain {coarse:e} about {axis}"
+            );
+            assert!(
+                fine < 0.35 * coarse,
+                "{kind:?}, second order: {coarse:e} -> {fine:e}"
+            );
+        }
     }
 }
 
@@ -188,47 +243,38 @@ fn stable_step_is_below_the_critical_step_of_the_element() {
             .unwrap();
     let laminate = card.laminate;
     let t = laminate.reference_thickness();
-    let shapes = [
-        [
-            Vector2::new(0.0, 0.0),
-            Vector2::new(2.0, 0.0),
-            Vector2::new(1.0, 1.0),
-        ], // crossed cell
-        [
-            Vector2::new(0.0, 0.0),
-            Vector2::new(1.0, 0.0),
-            Vector2::new(0.0, 1.0),
-        ], // right
-        [
-            Vector2::new(0.0, 0.0),
-            Vector2::new(1.0, 0.0),
-            Vector2::new(0.5, 0.866),
-        ], // equilateral
-        [
-            Vector2::new(0.0, 0.0),
-            Vector2::new(3.0, 0.0),
-            Vector2::new(0.4, 0.7),
-        ], // skewed
+    let v = Vector2::new;
+    let shapes: [Vec<Vector2<f64>>; 7] = [
+        vec![v(0.0, 0.0), v(2.0, 0.0), v(1.0, 1.0)], // crossed cell
+        vec![v(0.0, 0.0), v(1.0, 0.0), v(0.0, 1.0)], // right
+        vec![v(0.0, 0.0), v(1.0, 0.0), v(0.5, 0.866)], // equilateral
+        vec![v(0.0, 0.0), v(3.0, 0.0), v(0.4, 0.7)], // skewed
+        vec![v(0.0, 0.0), v(1.0, 0.0), v(1.0, 1.0), v(0.0, 1.0)], // square
+        vec![v(0.0, 0.0), v(3.0, 0.0), v(3.0, 1.0), v(0.0, 1.0)], // long quadrilateral
+        vec![v(0.0, 0.0), v(1.3, 0.2), v(1.0, 1.1), v(-0.2, 0.8)], // distorted quadrilateral
     ];
     for (shape, gamma_deg) in shapes
         .iter()
-        .flat_map(|s| [0.0, 20.0, 40.0].map(move |g| (*s, g)))
+        .flat_map(|s| [0.0, 20.0, 40.0].map(move |g| (s.clone(), g)))
     {
         for angle_deg in [0.0, 30.0, 45.0, 90.0] {
             let angle = f64::to_radians(angle_deg);
-            let x_ref = shape.map(|p| Vector3::new(p.x, p.y, 0.0));
+            let x_ref: Vec<Vector3<f64>> =
+                shape.iter().map(|p| Vector3::new(p.x, p.y, 0.0)).collect();
             // sheared like a bias-extension zone: yarns at +-45° turned towards each other
             let g = f64::to_radians(gamma_deg);
             let shear = rotation([0.0, 0.0, std::f64::consts::FRAC_PI_4])
                 * trellis(g, 1.002, 1.002, 1.0)
                 * rotation([0.0, 0.0, -std::f64::consts::FRAC_PI_4]);
-            let x0 = x_ref.map(|x| shear * x);
-            let e = MembraneElement::new(
-                [0, 1, 2],
-                x_ref,
-                &Vector3::new(angle.cos(), angle.sin(), 0.0),
-            )
-            .unwrap();
+            let x0: Vec<Vector3<f64>> = x_ref.iter().map(|x| shear * x).collect();
+            let cell = match shape.len() {
+                3 => Cell::Triangle([0, 1, 2]),
+                _ => Cell::Quad([0, 1, 2, 3]),
+            };
+            let corners = shape.len();
+            let e =
+                MembraneElement::new(cell, &x_ref, &Vector3::new(angle.cos(), angle.sin(), 0.0))
+                    .unwrap();
             let forces = |x: &[Vector3<f64>]| {
                 let f = e.gradient(x);
                 let kin = MembraneKinematics::from_deformation(
@@ -241,23 +287,27 @@ fn stable_step_is_below_the_critical_step_of_the_element() {
                     .membrane_response(&kin, 0.0, &mut laminate.initial_state())
                     .unwrap()
                     .n;
-                e.internal_forces(&f, &n)
+                let mut forces = e.internal_forces(&f, &n);
+                let shear_stiffness = laminate.shear_modulus(20.0).unwrap() * t;
+                e.hourglass_forces(x, shear_stiffness, &mut forces);
+                forces
             };
             // in-plane stiffness by central differences at rest
             let h = 1e-7;
-            let mut k = DMatrix::zeros(6, 6);
-            for j in 0..6 {
+            let dofs = 2 * corners;
+            let mut k = DMatrix::zeros(dofs, dofs);
+            for j in 0..dofs {
                 let (node, dir) = (j / 2, j % 2);
                 let mut plus = x0.to_vec();
                 let mut minus = x0.to_vec();
                 plus[node][dir] += h;
                 minus[node][dir] -= h;
                 let (fp, fm) = (forces(&plus), forces(&minus));
-                for i in 0..6 {
+                for i in 0..dofs {
                     k[(i, j)] = (fp[i / 2][i % 2] - fm[i / 2][i % 2]) / (2.0 * h);
                 }
             }
-            let mass = card.density * t * e.area / 3.0;
+            let mass = card.density * t * e.area / corners as f64;
             let k_sym = (&k + k.transpose()) * (0.5 / mass);
             let omega_max = k_sym.symmetric_eigenvalues().max().sqrt();
             let critical = 2.0 / omega_max;

@@ -10,6 +10,7 @@ use common::repo_path;
 use thermostamp::experiment::picture_frame::{PictureFrame, PictureFrameRow, PictureFrameRun};
 use thermostamp::experiment::sheet_test::SheetTest;
 use thermostamp::material::MaterialCard;
+use thermostamp::mesh::DiagonalPattern;
 
 fn card(relative: &str) -> MaterialCard {
     MaterialCard::load(&repo_path(relative)).unwrap()
@@ -46,18 +47,27 @@ fn work_of_the_force(rows: &[PictureFrameRow]) -> f64 {
         .sum()
 }
 
+/// On crossed triangles and on quadrilaterals (yarns along their edges).
 #[test]
 fn sheet_shears_with_the_frame_and_the_force_normalises_to_the_shear_law() {
+    for pattern in [DiagonalPattern::Crossed, DiagonalPattern::Quad] {
+        shears_with_the_frame(pattern);
+    }
+}
+
+fn shears_with_the_frame(pattern: DiagonalPattern) {
     let card = card("tests/data/stiff-yarn-fabric.toml");
     let t_b = card.laminate.layers()[0].thickness;
-    let result = run(&stiff_yarn_frame(), &card);
+    let mut test = stiff_yarn_frame();
+    test.process.pattern = pattern;
+    let result = run(&test, &card);
     let last = result.rows.last().unwrap();
     assert!(last.shear_angle_frame > 54.0, "{}°", last.shear_angle_frame);
     let mut checked = 0;
     for row in &result.rows {
         assert!(
             (row.shear_angle - row.shear_angle_frame).abs() < 0.2,
-            "d = {:.1} mm: interior {:.3}° vs frame {:.3}°",
+            "{pattern:?}, d = {:.1} mm: interior {:.3}° vs frame {:.3}°",
             row.displacement,
             row.shear_angle,
             row.shear_angle_frame
@@ -72,7 +82,7 @@ fn sheet_shears_with_the_frame_and_the_force_normalises_to_the_shear_law() {
         let got = row.normalised_shear_force;
         assert!(
             (got - expected).abs() < 0.03 * expected,
-            "{:.1}°: F_sh {got} vs {expected}",
+            "{pattern:?}, {:.1}°: F_sh {got} vs {expected}",
             row.shear_angle_frame
         );
         checked += 1;

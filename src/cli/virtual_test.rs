@@ -59,7 +59,8 @@ pub struct CommonArgs {
     /// Target element size (mm). Default: the test's, below.
     #[arg(long, allow_negative_numbers = true)]
     element_size: Option<f64>,
-    /// How rectangular cells are cut into triangles.
+    /// How rectangular cells are meshed: quad keeps them as 4-node quadrilaterals, the others
+    /// cut them into triangles.
     #[arg(long, value_enum, default_value_t = DiagonalPattern::Crossed)]
     pattern: DiagonalPattern,
     /// Crosshead travel at the end (mm). Default: the test's, below.
@@ -383,10 +384,7 @@ fn check_specimen_memory(
 ) -> Result<(), String> {
     let cells = |side: f64| (side / p.element_size).round().max(1.0);
     let (nx, ny) = (cells(width), cells(length));
-    let (elements, nodes) = match p.pattern {
-        DiagonalPattern::Crossed => (4.0 * nx * ny, (nx + 1.0) * (ny + 1.0) + nx * ny),
-        _ => (2.0 * nx * ny, (nx + 1.0) * (ny + 1.0)),
-    };
+    let (elements, nodes) = p.pattern.counts(nx, ny);
     let layers = card.laminate.initial_state().thickness_stretch.len();
     let (per_element, per_node, _) = estimate::item_bytes(layers, false, 0);
     estimate::check_memory(elements * per_element + nodes * per_node, "--element-size")

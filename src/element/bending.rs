@@ -2,10 +2,10 @@
 //! rotation-free shell triangles of Phaal & Calladine 1992 and Oñate & Zárate 2000: the
 //! curvature of each element is read off the positions of the nodes around it.
 //!
-//! A quadrilateral's curvature is the least-squares quadratic through the heights of its four
-//! corners and every node of its 1-ring (twelve on a structured mesh) **(choice)**: it
-//! reproduces any quadratic surface exactly, sees the cell's own warp (a fold across either
-//! diagonal) as twist, and has no preferred diagonal. The rest of this page is the triangle's.
+//! A quadrilateral's curvature is the mean of the interpolating patches of the four triangles
+//! its corners make **(choice)**, see `BendingPatch::quadrilateral`: it reproduces any
+//! quadratic surface exactly, sees the cell's own warp (a fold across either diagonal) as
+//! twist, and has no preferred diagonal. The rest of this page is the triangle's.
 //!
 //! The heights of six nodes above a triangle's current plane, `w_i = (x_i - x_0) . n`, are
 //! interpolated by a quadratic in the triangle's reference in-plane coordinates `(X, Y)`, and
@@ -210,79 +210,47 @@ impl BendingPatch {
     /// patch admits no unique quadratic (fewer than six nodes, or all on a conic).
     fn new(mesh: &Mesh, e: &MembraneElement, ring: Vec<usize>) -> Option<Self> {
         if e.cell.is_quad() {
-            return Self::least_squares(mesh, e, ring);
+            return Self::quadrilateral(mesh, e, ring);
         }
         // the corners stay among the candidates (never chosen: they would repeat a point), as
         // the interpolation was first measured
-        let ring: Vec<usize> = e.nodes().iter().copied().chain(ring).collect();
-        let origin = mesh.nodes[e.nodes()[0]];
-        // lengths scaled by the altitude, so that the interpolation matrix is of order one
-        let scale = e.altitude;
-        let local = |n: usize| {
-            let d = mesh.nodes[n] - origin;
-            Vector2::new(d.dot(&e.basis.column(0)), d.dot(&e.basis.column(1))) / scale
-        };
-        let corners: [Vector2<f64>; 3] = std::array::from_fn(|a| local(e.nodes()[a]));
-        let candidates: Vec<Vector2<f64>> = ring.iter().map(|&n| local(n)).collect();
-        let chosen = best_interpolation_points(&corners, &candidates)?;
-        let points: [Vector2<f64>; 6] = std::array::from_fn(|i| {
-            if i < 3 {
-                corners[i]
-            } else {
-                candidates[chosen[i - 3]]
-            }
-        });
-        let inverse = quadratic_basis(&points).try_inverse()?;
-        // w_XX = 2 c3, w_YY = 2 c5, w_XY = c4, back in mm
-        let s2 = scale * scale;
-        let curvature_operator = (0..6)
-            .map(|i| {
-                Vector3::new(
-                    2.0 * inverse[(3, i)],
-                    2.0 * inverse[(5, i)],
-                    inverse[(4, i)],
-                ) / s2
-            })
-            .collect();
-        let nodes = e
-            .nodes()
-            .iter()
-            .copied()
-            .chain(chosen.iter().map(|&c| ring[c]))
-            .collect();
+        let candidates: Vec<usize> = e.nodes().iter().copied().chain(ring).collect();
+        let corners = [e.nodes()[0], e.nodes()[1], e.nodes()[2]];
+        let (nodes, curvature_operator) = interpolation(mesh, e, corners, &candidates)?;
         Some(Self::at_rest(mesh, e, nodes, curvature_operator))
     }
 
-    /// The patch of quadrilateral `e`: the least-squares quadratic through its corners and
-    /// its whole 1-ring, `G = (A^T A)^-1 A^T` with `A` the rows `(1, X, Y, X^2, XY, Y^2)`;
-    /// `None` when they admit no unique quadratic.
-    fn least_squares(mesh: &Mesh, e: &MembraneElement, ring: Vec<usize>) -> Option<Self> {
-        let origin = e.cell.centroid(&mesh.nodes);
-        let scale = e.altitude;
-        let nodes: Vec<usize> = e.nodes().iter().copied().chain(ring).collect();
-        let rows: Vec<[f64; 6]> = nodes
-            .iter()
-            .map(|&n| {
-                let d = mesh.nodes[n] - origin;
-                let p = Vector2::new(d.dot(&e.basis.column(0)), d.dot(&e.basis.column(1))) / scale;
-                [1.0, p.x, p.y, p.x * p.x, p.x * p.y, p.y * p.y]
-            })
-            .collect();
-        let a = nalgebra::DMatrix::from_fn(rows.len(), 6, |i, j| rows[i][j]);
-        let smallest = a
-            .clone()
-            .singular_values()
-            .iter()
-            .fold(f64::INFINITY, |m, &v| m.min(v));
-        if !(smallest > SINGULAR) {
-            return None;
+    /// The patch of quadrilateral `e`: the mean of the interpolating patches of the four
+    /// triangles its corners make (`abc`, `bcd`, `cda`, `dab`), each on its three corners and
+    /// the three points of the quadrilateral's 1-ring (the fourth corner included) that
+    /// interpolate best. Each reproduces any quadratic, so their mean does; taking all four
+    /// keeps either diagonal from being preferred. A least-squares quadratic over the 1-ring
+    /// was tried first and fails: it is blind to a zigzag `w = (-1)^i` along a row of cells
+    /// (the four columns of a patch fit it with no quadratic part), into which a compressed
+    /// strip relaxes at 0.16 of the Euler load.
+    fn quadrilateral(mesh: &Mesh, e: &MembraneElement, ring: Vec<usize>) -> Option<Self> {
+        let q = e.nodes();
+        let mut nodes: Vec<usize> = q.iter().copied().chain(ring.iter().copied()).collect();
+        let mut operator = vec![Vector3::zeros(); nodes.len()];
+        for k in 0..4 {
+            let corners = [q[k], q[(k + 1) % 4], q[(k + 2) % 4]];
+            let (patch, columns) = interpolation(mesh, e, corners, &nodes)?;
+            for (node, column) in patch.iter().zip(columns) {
+                let place = nodes.iter().position(|n| n == node)?;
+                operator[place] += column / 4.0;
+            }
         }
-        let normal = (a.transpose() * &a).try_inverse()? * a.transpose();
-        let s2 = scale * scale;
-        let curvature_operator = (0..nodes.len())
-            .map(|i| Vector3::new(2.0 * normal[(3, i)], 2.0 * normal[(5, i)], normal[(4, i)]) / s2)
+        // ring nodes no sub-triangle chose carry nothing
+        let used: Vec<bool> = operator
+            .iter()
+            .enumerate()
+            .map(|(i, g)| i < 4 || g.norm() > 0.0)
             .collect();
-        Some(Self::at_rest(mesh, e, nodes, curvature_operator))
+        let mut keep = used.iter();
+        nodes.retain(|_| *keep.next().unwrap_or(&false));
+        let mut keep = used.iter();
+        operator.retain(|_| *keep.next().unwrap_or(&false));
+        Some(Self::at_rest(mesh, e, nodes, operator))
     }
 
     /// The patch on `nodes` with the operator `G`, its rest curvature that of the reference
@@ -350,6 +318,51 @@ impl CurrentPlane {
         let [e1, e2] = self.edges;
         [(e1 - e2).cross(&u), e2.cross(&u), u.cross(&e1)]
     }
+}
+
+/// The interpolating quadratic of the triangle on `corners` and the three of `candidates`
+/// that interpolate best, in the local basis of `e`: the six nodes and the column of `G` of
+/// each (what its height adds to `(w_XX, w_YY, w_XY)`, 1/mm).
+fn interpolation(
+    mesh: &Mesh,
+    e: &MembraneElement,
+    corners: [usize; 3],
+    candidates: &[usize],
+) -> Option<(Vec<usize>, Vec<Vector3<f64>>)> {
+    let origin = mesh.nodes[corners[0]];
+    // lengths scaled by the altitude, so that the interpolation matrix is of order one
+    let scale = e.altitude;
+    let local = |n: usize| {
+        let d = mesh.nodes[n] - origin;
+        Vector2::new(d.dot(&e.basis.column(0)), d.dot(&e.basis.column(1))) / scale
+    };
+    let corner_points = corners.map(local);
+    let candidate_points: Vec<Vector2<f64>> = candidates.iter().map(|&n| local(n)).collect();
+    let chosen = best_interpolation_points(&corner_points, &candidate_points)?;
+    let points: [Vector2<f64>; 6] = std::array::from_fn(|i| {
+        if i < 3 {
+            corner_points[i]
+        } else {
+            candidate_points[chosen[i - 3]]
+        }
+    });
+    let inverse = quadratic_basis(&points).try_inverse()?;
+    // w_XX = 2 c3, w_YY = 2 c5, w_XY = c4, back in mm
+    let s2 = scale * scale;
+    let columns = (0..6)
+        .map(|i| {
+            Vector3::new(
+                2.0 * inverse[(3, i)],
+                2.0 * inverse[(5, i)],
+                inverse[(4, i)],
+            ) / s2
+        })
+        .collect();
+    let nodes = corners
+        .into_iter()
+        .chain(chosen.iter().map(|&c| candidates[c]))
+        .collect();
+    Some((nodes, columns))
 }
 
 /// Rows `(1, X, Y, X^2, XY, Y^2)` of six points.

@@ -5,7 +5,6 @@
 
 use super::scenario::{BlankShape, Scenario, ToolSet};
 use crate::material::MaterialCard;
-use crate::mesh::DiagonalPattern;
 use crate::solver::estimate::{self, item_bytes, RunEstimate};
 use crate::solver::{Model, SolverSettings};
 
@@ -31,10 +30,7 @@ pub fn check_before_mesh(s: &Scenario, card: &MaterialCard) -> Result<(), String
     };
     let cells = |side: f64| (side / element_size).round().max(1.0);
     let (nx, ny) = (cells(*width), cells(*length));
-    let (elements, nodes) = match pattern {
-        DiagonalPattern::Crossed => (4.0 * nx * ny, (nx + 1.0) * (ny + 1.0) + nx * ny),
-        _ => (2.0 * nx * ny, (nx + 1.0) * (ny + 1.0)),
-    };
+    let (elements, nodes) = pattern.counts(nx, ny);
     let tool_triangles = match &s.tools {
         ToolSet::BuiltIn(t) => {
             // punch, die and holder each about as wide as the blank plus 10 mm, in

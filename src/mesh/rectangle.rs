@@ -88,6 +88,19 @@ pub fn rectangle(width: f64, length: f64, nx: usize, ny: usize, pattern: Diagona
     }
 }
 
+impl DiagonalPattern {
+    /// Elements and nodes of a rectangle of `nx` by `ny` cells with this pattern (as `f64`:
+    /// for size estimates of meshes that are too large to build).
+    pub fn counts(self, nx: f64, ny: f64) -> (f64, f64) {
+        let corners = (nx + 1.0) * (ny + 1.0);
+        match self {
+            DiagonalPattern::Quad => (nx * ny, corners),
+            DiagonalPattern::Right | DiagonalPattern::Alternating => (2.0 * nx * ny, corners),
+            DiagonalPattern::Crossed => (4.0 * nx * ny, corners + nx * ny),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -111,6 +124,8 @@ mod tests {
             for t in &mesh.cells {
                 assert!(t.area_vector(&mesh.nodes).z > 0.0, "{pattern:?}");
             }
+            let (elements, nodes) = pattern.counts(6.0, 18.0);
+            assert_eq!((elements, nodes), (mesh.cells.len() as f64, mesh.nodes.len() as f64));
             assert_eq!(mesh.node_set("top").unwrap().len(), 7);
             assert!(mesh
                 .node_set("top")
