@@ -1,7 +1,8 @@
 //! The explicit solver's hot loop on the bias-extension benchmark specimen (150 x 450 mm,
-//! ±45°, crossed cells, T300/PPS laminate at 300 °C): `cargo bench --bench internal_forces`.
+//! ±45°, T300/PPS laminate at 300 °C): `cargo bench --bench internal_forces`.
 //!
-//! For 2 mm and 1 mm cells, on 1 and 2 threads: the internal-force pass alone (element loop
+//! For 2 mm and 1 mm cells, crossed triangles (four per cell), single-diagonal triangles (two)
+//! and quadrilaterals (one), on 1 and 2 threads: the internal-force pass alone (element loop
 //! plus nodal gather, as in every step) and whole explicit steps (force pass, stable step,
 //! nodal update, energy sums), as element-steps per second. A plain timing loop, like the
 //! material-point bench. Record the figures in docs/performance.md.
@@ -12,6 +13,7 @@ use std::time::{Duration, Instant};
 use thermostamp::experiment::bias_extension::BiasExtension;
 use thermostamp::experiment::sheet_test::SheetTest;
 use thermostamp::material::MaterialCard;
+use thermostamp::mesh::DiagonalPattern;
 use thermostamp::solver::{self, InternalForces, Model, Observer, SolverSettings, State};
 
 const TEMPERATURE: f64 = 300.0;
@@ -74,12 +76,28 @@ fn main() {
     )
     .expect("shipped card");
     println!(
-        "{:>6} {:>9} {:>7} {:>14} {:>16} {:>16} {:>8}",
-        "cell", "elements", "threads", "pass (ms)", "el/s (forces)", "el-steps/s", "speedup"
+        "{:>6} {:>11} {:>9} {:>7} {:>14} {:>16} {:>16} {:>8}",
+        "cell",
+        "pattern",
+        "elements",
+        "threads",
+        "pass (ms)",
+        "el/s (forces)",
+        "el-steps/s",
+        "speedup"
     );
-    for size in [2.0, 1.0] {
+    let patterns = [
+        DiagonalPattern::Crossed,
+        DiagonalPattern::Right,
+        DiagonalPattern::Quad,
+    ];
+    for (size, pattern) in [2.0, 1.0]
+        .into_iter()
+        .flat_map(|s| patterns.map(|p| (s, p)))
+    {
         let mut test = BiasExtension::benchmark(TEMPERATURE);
         test.process.element_size = size;
+        test.process.pattern = pattern;
         let model = test.model(&card.laminate, card.density).expect("model");
         let settings = test.settings();
         let elements = model.elements.len() as f64;
@@ -97,8 +115,9 @@ fn main() {
             });
             let speedup = serial.map_or(1.0, |s: f64| s / step);
             serial.get_or_insert(step);
+            let name = format!("{pattern:?}").to_lowercase();
             println!(
-                "{size:>4}mm {elements:>9} {threads:>7} {:>14.2} {:>16.3e} {:>16.3e} {speedup:>8.2}",
+                "{size:>4}mm {name:>11} {elements:>9} {threads:>7} {:>14.2} {:>16.3e} {:>16.3e} {speedup:>8.2}",
                 pass * 1e3,
                 elements / pass,
                 elements / step

@@ -288,8 +288,22 @@ fn stable_step_is_below_the_critical_step_of_the_element() {
                     .unwrap()
                     .n;
                 let mut forces = e.internal_forces(&f, &n);
-                let shear_stiffness = laminate.shear_modulus(20.0).unwrap() * t;
-                e.hourglass_forces(x, shear_stiffness, &mut forces);
+                let moduli = thermostamp::element::membrane::HourglassModuli {
+                    shear: laminate.shear_modulus(20.0).unwrap() * t,
+                    yarn: laminate
+                        .wave_modulus(
+                            &MembraneKinematics {
+                                c: Matrix2::identity(),
+                                c_dot: Matrix2::zeros(),
+                                temperature: 20.0,
+                                fibres: FibreDirections::default(),
+                            },
+                            &laminate.initial_state(),
+                        )
+                        .unwrap()
+                        * t,
+                };
+                e.hourglass_forces(x, &moduli, &mut forces);
                 forces
             };
             // in-plane stiffness by central differences at rest

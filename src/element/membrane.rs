@@ -40,24 +40,36 @@ pub struct MembraneElement {
 /// The in-plane hourglass mode of a one-point quadrilateral (Flanagan & Belytschko 1981):
 /// `q = sum_a gamma_a x_a`, with `gamma_a = (h_a - (h . X) grad0 N_a) / 4` and
 /// `h = (1, -1, 1, -1)`, vanishes for every linear field (rigid motion and uniform strain), so
-/// it takes nothing from the one-point response. Its part in the current tangent plane, `q_t`,
-/// is held by the energy `1/2 k q_t . q_t` with
-/// `k = HOURGLASS_FRACTION (2/3) G t0 A0 sum_a |grad0 N_a|^2`, `G t0` the laminate's in-plane
-/// shear stiffness at rest: the energy a fully integrated bilinear element gives the mode
-/// through shear, `(4/3) G t0` for a square (docs/model.md §4).
+/// it takes nothing from the one-point response; `q` is the amplitude of the bilinear
+/// displacement `u = q xi eta`. It is held by two energies (docs/model.md §4):
+///
+/// - shear: `1/2 k_s |q_t|^2`, `q_t` its part in the current tangent plane,
+///   `k_s = (2/3) G t0 A0 sum_a |grad0 N_a|^2` with `G t0` the laminate's in-plane shear
+///   stiffness at rest: what a fully integrated bilinear element gives the mode through shear;
+/// - yarns: `1/2 sum_y E t0 Y_y (y . q)^2` over warp and weft, `y` the current yarn direction.
+///   The mode stretches a yarn by `(y . q)(eta (a . grad xi) + xi (a . grad eta))`, a linear
+///   field; only its variation across the yarn (a neighbouring parallel yarn stretched more)
+///   is held, `Y_y = c_y^2 I_y`, `c_y = (a . grad xi)(n . grad eta) + (a . grad eta)(n . grad xi)`,
+///   `I_y = int ((X - Xc) . n)^2 dA`, `a` the reference yarn, `n` normal to it in the plane.
+///   With the yarns along the edges this is the fully integrated element's yarn energy (the
+///   edges are yarns, as in the pin-jointed net); with yarns at 45° to the edges `c_y = 0`: the
+///   variation along a yarn, which would lock the element, is not held.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Hourglass {
     pub gamma: [f64; 4],
-    /// `(2/3) A0 sum_a |grad0 N_a|^2`: `k = HOURGLASS_FRACTION G t0 x this`.
-    pub stiffness_factor: f64,
+    /// `(2/3) A0 sum_a |grad0 N_a|^2`: `k_s = G t0 x this`.
+    pub shear_factor: f64,
+    /// `Y_y` of the warp and of the weft (dimensionless: `E t0 Y_y` is in N/mm).
+    pub yarn_factors: [f64; 2],
 }
 
-/// Fraction of the shear energy of a fully integrated element given to the hourglass mode
-/// **(choice)**: all of it, which is physical (the mode shears the cell), far below the yarns'
-/// stiffness (the yarns' share of the mode would lock the element when they cross its edges),
-/// and, measured on the hemisphere (docs/model.md §4), enough to keep the mode out of the
-/// formed parts: ten and a thousand times more change the largest shear by 1.3 and 1.6°.
-pub const HOURGLASS_FRACTION: f64 = 1.0;
+/// What holds the hourglass mode, per unit reference width (N/mm): the laminate's in-plane
+/// shear stiffness `G t0` and its yarns' tension stiffness `E t0`, both at rest.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct HourglassModuli {
+    pub shear: f64,
+    pub yarn: f64,
+}
 
 /// Why an element cannot be built.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -107,15 +119,16 @@ impl MembraneElement {
         if in_plane.norm() < 1e-6 * warp_direction.norm() {
             return Err(ElementError::WarpNormalToSheet);
         }
+        let fibres = FibreDirections::in_plane(in_plane.y.atan2(in_plane.x));
         let (area, shape_gradients, altitude, hourglass) = match cell {
             Cell::Triangle(_) => triangle_geometry(&local),
-            Cell::Quad(_) => quad_geometry(&local),
+            Cell::Quad(_) => quad_geometry(&local, &fibres),
         };
         Ok(Self {
             cell,
             area,
             shape_gradients,
-            fibres: FibreDirections::in_plane(in_plane.y.atan2(in_plane.x)),
+            fibres,
             altitude,
             basis: Matrix3x2::from_columns(&[e1, e2]),
             hourglass,
@@ -144,59 +157,87 @@ impl MembraneElement {
         self.shape_gradients.map(|g| fn_area * g)
     }
 
-    /// The hourglass forces `k gamma_a q_t` of a quadrilateral at the positions `x`, added to
-    /// `forces`, for the in-plane shear stiffness `shear_stiffness = G t0` (N/mm); returns the
-    /// mode's energy `1/2 k q_t . q_t`. Nothing for a triangle.
+    /// The hourglass forces `dW/dx_a` of a quadrilateral at the positions `x`, added to
+    /// `forces`, the turn of the tangent plane and of the yarns with `x` included (the forces
+    /// are exactly those of the energy); returns the mode's energy. Nothing for a triangle.
     pub fn hourglass_forces(
         &self,
         x: &[Vector3<f64>],
-        shear_stiffness: f64,
+        moduli: &HourglassModuli,
         forces: &mut [Vector3<f64>; 4],
     ) -> f64 {
-        let Some(hourglass) = &self.hourglass else {
-            return 0.0;
-        };
-        let (k, q_t) = self.hourglass_mode(hourglass, x, shear_stiffness);
-        for (f, g) in forces.iter_mut().zip(hourglass.gamma) {
-            *f += q_t * (k * g);
+        match &self.hourglass {
+            Some(hourglass) => self.hourglass_mode(hourglass, x, moduli, Some(forces)),
+            None => 0.0,
         }
-        0.5 * k * q_t.norm_squared()
     }
 
     /// Energy of the hourglass mode at `x` (N·mm); zero for a triangle.
-    pub fn hourglass_energy(&self, x: &[Vector3<f64>], shear_stiffness: f64) -> f64 {
+    pub fn hourglass_energy(&self, x: &[Vector3<f64>], moduli: &HourglassModuli) -> f64 {
         self.hourglass.as_ref().map_or(0.0, |hourglass| {
-            let (k, q_t) = self.hourglass_mode(hourglass, x, shear_stiffness);
-            0.5 * k * q_t.norm_squared()
+            self.hourglass_mode(hourglass, x, moduli, None)
         })
     }
 
-    /// `k` and the mode's part `q_t` in the current tangent plane (normal along the cross
-    /// product of the current diagonals).
+    /// The mode's energy, and where `forces` is given its gradient added to them.
     fn hourglass_mode(
         &self,
         hourglass: &Hourglass,
         x: &[Vector3<f64>],
-        shear_stiffness: f64,
-    ) -> (f64, Vector3<f64>) {
-        let q: Vector3<f64> = self
-            .nodes()
+        moduli: &HourglassModuli,
+        mut forces: Option<&mut [Vector3<f64>; 4]>,
+    ) -> f64 {
+        let corners: [Vector3<f64>; 4] = std::array::from_fn(|a| x[self.nodes()[a]]);
+        let q: Vector3<f64> = corners
             .iter()
             .zip(hourglass.gamma)
-            .map(|(&n, g)| x[n] * g)
+            .map(|(x, g)| x * g)
             .sum();
-        let normal = self.cell.area_vector(x);
-        let q_t = match normal.try_normalize(0.0) {
-            Some(n) => q - n * n.dot(&q),
-            None => q,
+        let mut energy = 0.0;
+        // shear: 1/2 k_s (|q|^2 - (n . q)^2), n the unit normal of N = (x2 - x0) x (x3 - x1) / 2
+        let k_s = moduli.shear * hourglass.shear_factor;
+        let (d1, d2) = (corners[2] - corners[0], corners[3] - corners[1]);
+        let area_vector = 0.5 * d1.cross(&d2);
+        let (n, n_q, size) = match area_vector.try_normalize(0.0) {
+            Some(n) => (n, n.dot(&q), area_vector.norm()),
+            None => (Vector3::zeros(), 0.0, 1.0),
         };
-        let k = std::env::var("HGF")
-            .ok()
-            .and_then(|v| v.parse::<f64>().ok())
-            .unwrap_or(HOURGLASS_FRACTION)
-            * shear_stiffness
-            * hourglass.stiffness_factor;
-        (k, q_t)
+        energy += 0.5 * k_s * (q.norm_squared() - n_q * n_q);
+        if let Some(f) = forces.as_deref_mut() {
+            let q_t = q - n * n_q;
+            // d(n . q)/dx through n: v . dN, v = (I - n n^T) q / |N|
+            let v = q_t / size;
+            let (dn_d1, dn_d2) = (0.5 * d2.cross(&v), 0.5 * v.cross(&d1));
+            let turn = [-dn_d1, -dn_d2, dn_d1, dn_d2];
+            for a in 0..4 {
+                f[a] += q_t * (k_s * hourglass.gamma[a]) - turn[a] * (k_s * n_q);
+            }
+        }
+        // yarns: 1/2 k_y (y . q)^2, y = F a0 / |F a0|
+        let f_centre = self.gradient(x);
+        for (fibre, factor) in [self.fibres.warp, self.fibres.weft]
+            .iter()
+            .zip(hourglass.yarn_factors)
+        {
+            let k_y = moduli.yarn * factor;
+            let along = f_centre * fibre.xy();
+            let length = along.norm();
+            if k_y == 0.0 || length == 0.0 {
+                continue;
+            }
+            let y = along / length;
+            let y_q = y.dot(&q);
+            energy += 0.5 * k_y * y_q * y_q;
+            if let Some(f) = forces.as_deref_mut() {
+                // d(y . q)/dx_a = gamma_a y + (grad0 N_a . a0) (I - y y^T) q / |F a0|
+                let across = (q - y * y_q) / length;
+                for a in 0..4 {
+                    let lever = self.shape_gradients[a].dot(&fibre.xy());
+                    f[a] += (y * hourglass.gamma[a] + across * lever) * (k_y * y_q);
+                }
+            }
+        }
+        energy
     }
 
     /// A tensor given in the local basis (like the membrane resultant `N`) in global
@@ -238,8 +279,8 @@ fn triangle_geometry(p: &[Vector2<f64>]) -> Geometry {
 }
 
 /// Area `4 det J(0)`, centre gradients, stable-step length and hourglass vectors of a
-/// quadrilateral with corners `p` (local, about the centroid).
-fn quad_geometry(p: &[Vector2<f64>]) -> Geometry {
+/// quadrilateral with corners `p` (local, about the centroid) and yarns `fibres`.
+fn quad_geometry(p: &[Vector2<f64>], fibres: &FibreDirections) -> Geometry {
     const XI: [f64; 4] = [-1.0, 1.0, 1.0, -1.0];
     const ETA: [f64; 4] = [-1.0, -1.0, 1.0, 1.0];
     const H: [f64; 4] = [1.0, -1.0, 1.0, -1.0];
@@ -256,9 +297,23 @@ fn quad_geometry(p: &[Vector2<f64>]) -> Geometry {
     let gamma = std::array::from_fn(|a| (H[a] - h_dot_x.dot(&gradients[a])) / 4.0);
     let sum_squares: f64 = gradients.iter().map(|g| g.norm_squared()).sum();
     let longer_diagonal = (p[2] - p[0]).norm().max((p[3] - p[1]).norm());
+    // rows of J0^-1: grad xi and grad eta
+    let (grad_xi, grad_eta) = (
+        j_inv_t.column(0).into_owned(),
+        j_inv_t.column(1).into_owned(),
+    );
+    let yarn_factor = |a: Vector2<f64>| {
+        let n = Vector2::new(-a.y, a.x);
+        let c = a.dot(&grad_xi) * n.dot(&grad_eta) + a.dot(&grad_eta) * n.dot(&grad_xi);
+        // int ((X - Xc) . n)^2 dA of the parallelogram X - Xc = J0 (xi, eta)
+        let second_moment =
+            area / 3.0 * (n.dot(&j.column(0)).powi(2) + n.dot(&j.column(1)).powi(2));
+        c * c * second_moment
+    };
     let hourglass = Hourglass {
         gamma,
-        stiffness_factor: 2.0 / 3.0 * area * sum_squares,
+        shear_factor: 2.0 / 3.0 * area * sum_squares,
+        yarn_factors: [yarn_factor(fibres.warp.xy()), yarn_factor(fibres.weft.xy())],
     };
     (area, gradients, area / longer_diagonal, Some(hourglass))
 }
@@ -328,6 +383,11 @@ mod tests {
         );
     }
 
+    const MODULI: HourglassModuli = HourglassModuli {
+        shear: 2.0,
+        yarn: 30.0,
+    };
+
     fn distorted_quad() -> Vec<Vector3<f64>> {
         vec![
             Vector3::new(0.0, 0.0, 0.0),
@@ -377,7 +437,7 @@ mod tests {
                 .collect::<Vec<_>>(),
             x0.iter().map(|x| g * x).collect(),
         ] {
-            assert!(e.hourglass_energy(&x, 1.0) < 1e-28);
+            assert!(e.hourglass_energy(&x, &MODULI) < 1e-28);
         }
         // the hourglass pattern h = (1, -1, 1, -1) in the plane: held; out of the plane (the
         // cell folding across a diagonal): left to the bending
@@ -392,35 +452,44 @@ mod tests {
             .zip(h)
             .map(|(x, s)| x + Vector3::z() * 0.01 * s)
             .collect();
-        assert!(e.hourglass_energy(&in_plane, 1.0) > 1e-6);
-        assert!(e.hourglass_energy(&folded, 1.0) < 1e-12 * e.hourglass_energy(&in_plane, 1.0));
+        assert!(e.hourglass_energy(&in_plane, &MODULI) > 1e-6);
+        assert!(
+            e.hourglass_energy(&folded, &MODULI) < 1e-12 * e.hourglass_energy(&in_plane, &MODULI)
+        );
         // nor does the one point see the in-plane pattern: only the hourglass control does
         let f = e.gradient(&in_plane);
         assert!((f - e.gradient(&x0)).amax() < 1e-12);
     }
 
     #[test]
-    fn hourglass_forces_are_the_gradient_of_its_energy_in_the_plane_and_balance() {
+    fn hourglass_forces_are_the_gradient_of_its_energy_and_balance() {
         let x0 = distorted_quad();
         let e = quad();
         let x: Vec<_> = x0
             .iter()
             .enumerate()
             .map(|(a, p)| {
-                p + Vector3::new(0.03 * (a as f64).sin(), 0.05 * (1.7 * a as f64).cos(), 0.0)
+                let s = a as f64;
+                p + Vector3::new(
+                    0.03 * s.sin(),
+                    0.05 * (1.7 * s).cos(),
+                    0.04 * (2.3 * s).sin(),
+                )
             })
             .collect();
         let mut forces = [Vector3::zeros(); 4];
-        e.hourglass_forces(&x, 2.0, &mut forces);
+        e.hourglass_forces(&x, &MODULI, &mut forces);
         let total: Vector3<f64> = forces.iter().sum();
-        assert!(total.norm() < 1e-14, "{total}");
+        assert!(total.norm() < 1e-13, "{total}");
+        let moment: Vector3<f64> = forces.iter().zip(&x).map(|(f, p)| p.cross(f)).sum();
+        assert!(moment.norm() < 1e-12, "{moment}");
         let step = 1e-6;
         for a in 0..4 {
-            for axis in 0..2 {
+            for axis in 0..3 {
                 let (mut plus, mut minus) = (x.clone(), x.clone());
                 plus[a][axis] += step;
                 minus[a][axis] -= step;
-                let fd = (e.hourglass_energy(&plus, 2.0) - e.hourglass_energy(&minus, 2.0))
+                let fd = (e.hourglass_energy(&plus, &MODULI) - e.hourglass_energy(&minus, &MODULI))
                     / (2.0 * step);
                 assert!(
                     (fd - forces[a][axis]).abs() < 1e-7,
@@ -447,6 +516,70 @@ mod tests {
         assert_eq!(
             MembraneElement::new(Cell::Quad([0, 1, 2, 3]), &folded, &Vector3::x()).unwrap_err(),
             ElementError::Folded
+        );
+    }
+
+    #[test]
+    fn yarns_along_the_edges_hold_the_hourglass_as_full_integration_and_yarns_at_45_degrees_not() {
+        let square = [
+            Vector3::new(0.0, 0.0, 0.0),
+            Vector3::new(2.0, 0.0, 0.0),
+            Vector3::new(2.0, 2.0, 0.0),
+            Vector3::new(0.0, 2.0, 0.0),
+        ];
+        let quad = |warp: Vector3<f64>| {
+            MembraneElement::new(Cell::Quad([0, 1, 2, 3]), &square, &warp)
+                .unwrap()
+                .hourglass
+                .unwrap()
+        };
+        // a fully integrated bilinear square gives the mode u = s xi eta e_x the yarn energy
+        // 1/2 E t (4/3) s^2 (the yarn along x stretched by s eta (2/h))
+        let aligned = quad(Vector3::x());
+        assert!(
+            (aligned.yarn_factors[0] - 4.0 / 3.0).abs() < 1e-12,
+            "{aligned:?}"
+        );
+        assert!(
+            (aligned.yarn_factors[1] - 4.0 / 3.0).abs() < 1e-12,
+            "{aligned:?}"
+        );
+        assert!(
+            (aligned.shear_factor - 4.0 / 3.0).abs() < 1e-12,
+            "{aligned:?}"
+        );
+        let diagonal = quad(Vector3::new(1.0, 1.0, 0.0));
+        assert!(
+            diagonal.yarn_factors.iter().all(|y| y.abs() < 1e-12),
+            "{diagonal:?}"
+        );
+        // in between, cos^2 (2 theta) of the aligned one
+        let thirty = quad(Vector3::new(
+            30f64.to_radians().cos(),
+            30f64.to_radians().sin(),
+            0.0,
+        ));
+        assert!(
+            (thirty.yarn_factors[0] - 4.0 / 3.0 * 0.25).abs() < 1e-12,
+            "{thirty:?}"
+        );
+        // and the energy is E t Y (y . q)^2 / 2: the pattern h moved along x by s
+        let s = 0.01;
+        let h = [1.0, -1.0, 1.0, -1.0];
+        let moved: Vec<_> = square
+            .iter()
+            .zip(h)
+            .map(|(x, k)| x + Vector3::x() * s * k)
+            .collect();
+        let e = MembraneElement::new(Cell::Quad([0, 1, 2, 3]), &square, &Vector3::x()).unwrap();
+        let yarns = HourglassModuli {
+            shear: 0.0,
+            yarn: 3.0,
+        };
+        let energy = e.hourglass_energy(&moved, &yarns);
+        assert!(
+            (energy - 0.5 * 3.0 * 4.0 / 3.0 * s * s).abs() < 1e-12 * energy.max(1e-30),
+            "{energy}"
         );
     }
 }

@@ -36,8 +36,8 @@ pub struct Blank {
 #[derive(Clone, Debug, PartialEq)]
 pub enum BlankShape {
     /// Size along x and y (mm), centred on the punch axis; target element size (mm); cells cut
-    /// by `pattern` (single diagonals by default: bending is accurate on them, see
-    /// `element::bending`).
+    /// by `pattern` (4-node quadrilaterals by default: no preferred fold line, see
+    /// docs/model.md §4).
     Rectangle {
         width: f64,
         length: f64,
@@ -108,7 +108,7 @@ impl BlankTable {
                     width: need("width", self.width)?,
                     length: need("length", self.length)?,
                     element_size: need("element_size", self.element_size)?,
-                    pattern: self.pattern.unwrap_or(DiagonalPattern::Right),
+                    pattern: self.pattern.unwrap_or(DiagonalPattern::Quad),
                 }
             }
         };

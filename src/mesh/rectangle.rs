@@ -125,7 +125,10 @@ mod tests {
                 assert!(t.area_vector(&mesh.nodes).z > 0.0, "{pattern:?}");
             }
             let (elements, nodes) = pattern.counts(6.0, 18.0);
-            assert_eq!((elements, nodes), (mesh.cells.len() as f64, mesh.nodes.len() as f64));
+            assert_eq!(
+                (elements, nodes),
+                (mesh.cells.len() as f64, mesh.nodes.len() as f64)
+            );
             assert_eq!(mesh.node_set("top").unwrap().len(), 7);
             assert!(mesh
                 .node_set("top")

@@ -413,7 +413,7 @@ fn elastic_energy(model: &Model, state: &State) -> Result<f64, (usize, MaterialE
                 .laminate
                 .stored_energy(&kin, &state.laminate_states[k])
                 .map_err(|err| (k, err))?;
-            Ok(e.area * w + e.hourglass_energy(&state.positions, model.hourglass_stiffness))
+            Ok(e.area * w + e.hourglass_energy(&state.positions, &model.hourglass))
         })
         .collect();
     let membrane: f64 = membrane.into_iter().sum::<Result<f64, _>>()?;
@@ -754,7 +754,7 @@ fn element_loop(
                 let (n_damping, power) =
                     yarn_damping_resultant(&kin, xi, element_step, modulus, thickness);
                 result.forces = e.internal_forces(&f, &(response.n + n_damping));
-                e.hourglass_forces(positions, model.hourglass_stiffness, &mut result.forces);
+                e.hourglass_forces(positions, &model.hourglass, &mut result.forces);
                 let xi_total = xi + material_damping_ratio(viscosity, modulus, element_step);
                 result.stable_step = element_step * step_reduction(xi_total);
                 result.damping_power = power * e.area;

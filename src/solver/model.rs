@@ -3,8 +3,9 @@
 use crate::contact::{ContactSettings, RigidTool};
 use crate::element::bending::BendingError;
 use crate::element::membrane::ElementError;
+use crate::element::membrane::HourglassModuli;
 use crate::element::{Bending, BendingRigidity, MembraneElement};
-use crate::material::Laminate;
+use crate::material::{FibreDirections, Laminate, MaterialError, MembraneKinematics};
 use crate::mesh::{Mesh, MeshError};
 use nalgebra::Vector3;
 use std::sync::Arc;
@@ -53,9 +54,10 @@ pub struct Model {
     pub tools: Vec<RigidTool>,
     pub contact: ContactSettings,
     pub laminate: Laminate,
-    /// In-plane shear stiffness of the laminate at rest, `G t0` (N/mm): what holds the
-    /// hourglass mode of the quadrilaterals ([`MembraneElement::hourglass_forces`]).
-    pub hourglass_stiffness: f64,
+    /// What holds the hourglass mode of the quadrilaterals
+    /// ([`MembraneElement::hourglass_forces`]): the laminate's shear and yarn stiffness at
+    /// rest; zero on a mesh of triangles.
+    pub hourglass: HourglassModuli,
     /// Density of the ply (tonne/mm^3).
     pub density: f64,
     /// Isothermal temperature of the run (°C).
@@ -130,14 +132,10 @@ impl Model {
         if let Some(node) = used.iter().position(|u| !u) {
             return Err(ModelError::OrphanNode(node));
         }
-        let hourglass_stiffness = match mesh.has_quads() {
-            true => {
-                laminate
-                    .shear_modulus(temperature)
-                    .map_err(|e| ModelError::Material(e.to_string()))?
-                    * laminate.reference_thickness()
-            }
-            false => 0.0,
+        let hourglass = match mesh.has_quads() {
+            true => hourglass_moduli(&laminate, temperature)
+                .map_err(|e| ModelError::Material(e.to_string()))?,
+            false => HourglassModuli::default(),
         };
         let mut owner: Vec<Option<usize>> = vec![None; mesh.nodes.len()];
         for (c, constraint) in constraints.iter().enumerate() {
@@ -169,7 +167,7 @@ impl Model {
                 penalty_scale: 0.1,
                 max_penetration: laminate.reference_thickness(),
             },
-            hourglass_stiffness,
+            hourglass,
             // The run is isothermal: the laws' temperature tables are interpolated once here.
             laminate: laminate.at_temperature(temperature),
             density,
@@ -202,4 +200,23 @@ impl Model {
         }
         area
     }
+}
+
+/// `G t0` and `E t0` of the laminate at rest at `temperature` (`E` its wave modulus along a
+/// yarn, what sets the stable step).
+fn hourglass_moduli(
+    laminate: &Laminate,
+    temperature: f64,
+) -> Result<HourglassModuli, MaterialError> {
+    let t0 = laminate.reference_thickness();
+    let rest = MembraneKinematics {
+        c: nalgebra::Matrix2::identity(),
+        c_dot: nalgebra::Matrix2::zeros(),
+        temperature,
+        fibres: FibreDirections::default(),
+    };
+    Ok(HourglassModuli {
+        shear: laminate.shear_modulus(temperature)? * t0,
+        yarn: laminate.wave_modulus(&rest, &laminate.initial_state())? * t0,
+    })
 }
