@@ -35,6 +35,11 @@ pub struct Mesh {
     pub warp_directions: Option<Vec<Vector3<f64>>>,
 }
 
+/// What is wrong with a folded quadrilateral, after "element <label>" (the readers name the
+/// file's label).
+pub const FOLDED: &str = "is a quadrilateral that is not convex (a corner turns against the \
+    others, or two edges cross: check the order of its nodes)";
+
 /// What is wrong with a mesh.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum MeshError {
@@ -48,6 +53,9 @@ pub enum MeshError {
     },
     #[error("element {triangle} is degenerate (area {area:e} mm^2)")]
     Degenerate { triangle: usize, area: f64 },
+    /// A quadrilateral that is not convex ([`Cell::is_folded`]).
+    #[error("element {triangle} {FOLDED}")]
+    Folded { triangle: usize },
     #[error("node {node} has a non-finite coordinate")]
     NonFinite { node: usize },
     #[error("no set named '{name}' (the mesh has: {available})")]
@@ -88,8 +96,11 @@ impl Mesh {
             }
             let area = self.area(triangle);
             let scale = (self.nodes[t.nodes()[1]] - self.nodes[t.nodes()[0]]).norm_squared();
-            if area.is_nan() || area <= 1e-12 * scale || t.is_folded(&self.nodes) {
+            if area.is_nan() || area <= 1e-12 * scale {
                 return Err(MeshError::Degenerate { triangle, area });
+            }
+            if t.is_folded(&self.nodes) {
+                return Err(MeshError::Folded { triangle });
             }
         }
         check_sets("node", &self.node_sets, self.nodes.len())?;
