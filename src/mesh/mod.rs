@@ -38,7 +38,7 @@ pub struct Mesh {
 /// What is wrong with a folded quadrilateral, after "element <label>" (the readers name the
 /// file's label).
 pub const FOLDED: &str = "is a quadrilateral that is not convex (a corner turns against the \
-    others, or two edges cross: check the order of its nodes)";
+    others, two edges cross or two corners coincide: check its nodes and their order)";
 
 /// What is wrong with a mesh.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
