@@ -743,7 +743,12 @@ fn scenario_cases(f: &Fixtures) -> Vec<Case> {
         name: "mesh file with a folded quadrilateral".into(),
         args: run(&on_folded, &[], "folded-quad"),
         code: 2,
-        names: vec![folded, "line 7".into(), "element 7".into(), "not convex".into()],
+        names: vec![
+            folded,
+            "line 7".into(),
+            "element 7".into(),
+            "not convex".into(),
+        ],
     });
     let drape = |extra: &[&str], out: &str| {
         let mut args = vec!["drape".to_string(), example.clone()];

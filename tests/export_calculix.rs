@@ -161,9 +161,16 @@ fn calculix_takes_each_elements_orientation_and_thickness() {
              *NODE PRINT, NSET=right\nU\n*END STEP\n",
         )
         .unwrap();
-        let kind = if pattern == DiagonalPattern::Quad { "S4R" } else { "S3" };
+        let kind = if pattern == DiagonalPattern::Quad {
+            "S4R"
+        } else {
+            "S3"
+        };
         let plate = std::fs::read_to_string(dir.join("plate.inp")).unwrap();
-        assert!(plate.contains(&format!("*ELEMENT, TYPE={kind}\n")), "{plate}");
+        assert!(
+            plate.contains(&format!("*ELEMENT, TYPE={kind}\n")),
+            "{plate}"
+        );
         run_ccx(&dir);
         let dat = std::fs::read_to_string(dir.join("job.dat")).unwrap();
         let u = dat_rows(&dat, "displacements");

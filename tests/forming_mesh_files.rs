@@ -124,7 +124,13 @@ fn imported_blanks_and_tools_form_like_the_built_in_ones() {
         &scenario_text(QUAD_RECTANGLE, BUILT_IN_TOOLS),
     );
     let quad_run = formed(&quads);
-    assert!(quad_run.forming.model.mesh.cells.iter().all(|c| c.is_quad()));
+    assert!(quad_run
+        .forming
+        .model
+        .mesh
+        .cells
+        .iter()
+        .all(|c| c.is_quad()));
     let quad_reference = &quad_run.shear;
     let largest = quad_reference.iter().map(|r| r.1.abs()).fold(0.0, f64::max);
     println!("built-in, quadrilaterals: largest shear {largest:.2}°");
@@ -134,7 +140,11 @@ fn imported_blanks_and_tools_form_like_the_built_in_ones() {
         let blank = format!("mesh = {:?}", mesh);
         let scenario = load(&dir, "mesh.toml", &scenario_text(&blank, BUILT_IN_TOOLS));
         let run = formed(&scenario);
-        assert_eq!(run.forming.model.mesh.cells.len(), 256, "{file}: one cell per element");
+        assert_eq!(
+            run.forming.model.mesh.cells.len(),
+            256,
+            "{file}: one cell per element"
+        );
         let difference = largest_difference(quad_reference, &run.shear);
         println!("{file}: largest difference {difference:.2e}°");
         assert!(difference < 0.5, "{file}: {difference}°");

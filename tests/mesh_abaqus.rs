@@ -355,13 +355,16 @@ fn triangles_and_quadrilaterals_in_one_mesh_round_trip_in_their_order() {
     };
     let text = written(&mesh, Some(&output));
     // a block per run: S4R (cell 0), S3 (1-2), S4R (3-5), S3 (6-9), S4R (10-17)
-    let blocks: Vec<&str> = text
-        .lines()
-        .filter(|l| l.starts_with("*ELEMENT"))
-        .collect();
+    let blocks: Vec<&str> = text.lines().filter(|l| l.starts_with("*ELEMENT")).collect();
     assert_eq!(
         blocks,
-        ["*ELEMENT, TYPE=S4R", "*ELEMENT, TYPE=S3", "*ELEMENT, TYPE=S4R", "*ELEMENT, TYPE=S3", "*ELEMENT, TYPE=S4R"]
+        [
+            "*ELEMENT, TYPE=S4R",
+            "*ELEMENT, TYPE=S3",
+            "*ELEMENT, TYPE=S4R",
+            "*ELEMENT, TYPE=S3",
+            "*ELEMENT, TYPE=S4R"
+        ]
     );
     let read = deck(&text);
     assert_same_mesh(&read, &mesh, Some(&output.warp));
@@ -826,10 +829,7 @@ fn malformed_decks_fail_naming_the_file_and_line() {
     let mut failures = Vec::new();
     for (what, files, (file, line), words) in cases {
         match parse(&files) {
-            Ok(m) => failures.push(format!(
-                "{what}: read {} cells",
-                m.import.mesh.cells.len()
-            )),
+            Ok(m) => failures.push(format!("{what}: read {} cells", m.import.mesh.cells.len())),
             Err(e) => {
                 if (e.file.as_str(), e.line) != (file, line)
                     || !words.iter().all(|w| e.message.contains(w))

@@ -401,8 +401,7 @@ fn overlapping_and_interleaved_element_sets_survive_write_and_read() {
     mesh.node_sets.insert("even".to_string(), even);
     // 'first half' has no node set: the reader adds one, its elements' nodes
     let back = round_trip(&mesh).mesh;
-    let mut first_half: Vec<usize> = mesh
-        .element_sets["first half"]
+    let mut first_half: Vec<usize> = mesh.element_sets["first half"]
         .iter()
         .flat_map(|&t| mesh.cells[t].nodes().to_vec())
         .collect();

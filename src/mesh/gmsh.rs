@@ -1204,11 +1204,11 @@ impl RawFile {
                     self.elements[cell_element[triangle]].tag
                 ),
             ),
-            MeshError::Folded { triangle } => MeshFileError::in_file(
+            MeshError::Folded { element } => MeshFileError::in_file(
                 file,
                 format!(
                     "element {} {FOLDED}",
-                    self.elements[cell_element[triangle]].tag
+                    self.elements[cell_element[element]].tag
                 ),
             ),
             other => MeshFileError::in_file(file, other.to_string()),
@@ -1466,7 +1466,10 @@ mod tests {
             Cell::Quad([1, 2, 5, 4]),
             Cell::Triangle([4, 5, 6]),
         ];
-        assert_eq!(orientation_note(&good, |t| t as u64 + 1, |n| n as u64), None);
+        assert_eq!(
+            orientation_note(&good, |t| t as u64 + 1, |n| n as u64),
+            None
+        );
         // the second quadrangle numbered the other way round
         let bad = [Cell::Quad([0, 1, 4, 3]), Cell::Quad([1, 4, 5, 2])];
         let note = orientation_note(&bad, |t| t as u64 + 1, |n| n as u64).unwrap();

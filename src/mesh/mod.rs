@@ -54,8 +54,8 @@ pub enum MeshError {
     #[error("element {triangle} is degenerate (area {area:e} mm^2)")]
     Degenerate { triangle: usize, area: f64 },
     /// A quadrilateral that is not convex ([`Cell::is_folded`]).
-    #[error("element {triangle} {FOLDED}")]
-    Folded { triangle: usize },
+    #[error("element {element} {FOLDED}")]
+    Folded { element: usize },
     #[error("node {node} has a non-finite coordinate")]
     NonFinite { node: usize },
     #[error("no set named '{name}' (the mesh has: {available})")]
@@ -100,7 +100,7 @@ impl Mesh {
                 return Err(MeshError::Degenerate { triangle, area });
             }
             if t.is_folded(&self.nodes) {
-                return Err(MeshError::Folded { triangle });
+                return Err(MeshError::Folded { element: triangle });
             }
         }
         check_sets("node", &self.node_sets, self.nodes.len())?;
@@ -156,7 +156,7 @@ impl Mesh {
         sum / self.cells.len().max(1) as f64
     }
 
-    /// The triangles of the element set `name`.
+    /// The cells of the element set `name`.
     pub fn element_set(&self, name: &str) -> Result<&[usize], MeshError> {
         self.element_sets
             .get(name)
@@ -167,7 +167,7 @@ impl Mesh {
             })
     }
 
-    /// The nodes of the triangles of the element set `name`, in increasing order.
+    /// The nodes of the cells of the element set `name`, in increasing order.
     pub fn nodes_of_element_set(&self, name: &str) -> Result<Vec<usize>, MeshError> {
         let mut nodes: Vec<usize> = self
             .element_set(name)?
@@ -179,9 +179,9 @@ impl Mesh {
         Ok(nodes)
     }
 
-    /// The mesh of the element set `name` alone: its triangles and their nodes, renumbered in
+    /// The mesh of the element set `name` alone: its cells and their nodes, renumbered in
     /// order, with the sets and warp directions restricted to them. Also returns, for each
-    /// triangle kept, its index in `self`.
+    /// cell kept, its index in `self`.
     pub fn restricted_to(&self, name: &str) -> Result<(Mesh, Vec<usize>), MeshError> {
         let kept = self.element_set(name)?.to_vec();
         let mut new_node = vec![None; self.nodes.len()];

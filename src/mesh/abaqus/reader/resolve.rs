@@ -324,12 +324,7 @@ impl Model {
     }
 
     /// What [`Mesh::validate`] found, at the element or node concerned.
-    fn validation_error(
-        &self,
-        deck: &Deck,
-        error: MeshError,
-        kept: &[usize],
-    ) -> MeshFileError {
+    fn validation_error(&self, deck: &Deck, error: MeshError, kept: &[usize]) -> MeshFileError {
         let file = deck.files.first().cloned().unwrap_or_default();
         let element = |e: usize| &self.elements[e];
         match error {
@@ -344,9 +339,9 @@ impl Model {
                     element(triangle).label
                 ),
             ),
-            MeshError::Folded { triangle } => deck.error(
-                element(triangle).loc,
-                format!("element {} {}", element(triangle).label, FOLDED),
+            MeshError::Folded { element: e } => deck.error(
+                element(e).loc,
+                format!("element {} {}", element(e).label, FOLDED),
             ),
             MeshError::NonFinite { node } => match kept.get(node).map(|&n| &self.nodes[n]) {
                 Some(n) => deck.error(
