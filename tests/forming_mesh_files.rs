@@ -6,8 +6,9 @@
 //! The blank files are `tests/data/meshes/hemisphere-blank-10mm.{msh,inp}` (10 mm quadrilaterals,
 //! made by `make_hemisphere_blanks.py` there, with their own node and element numbering), read
 //! as quadrilaterals and so compared with the built-in blank of pattern `quad`; the
-//! STL files are the built-in tool surfaces written by this test. The built-in run's formed
-//! blank, exported for a structural analysis, is read back as well.
+//! STL files are the built-in tool surfaces written by this test. The built-in runs' formed
+//! blanks (triangles and quadrilaterals: S3 and S4R), exported for a structural analysis, are
+//! read back as well.
 
 mod common;
 
@@ -124,6 +125,7 @@ fn imported_blanks_and_tools_form_like_the_built_in_ones() {
         &scenario_text(QUAD_RECTANGLE, BUILT_IN_TOOLS),
     );
     let quad_run = formed(&quads);
+    check_export(&scratch_dir("forming", "mesh-files-quad"), &quad_run);
     assert!(quad_run
         .forming
         .model
