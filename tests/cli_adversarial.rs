@@ -732,6 +732,24 @@ fn scenario_cases(f: &Fixtures) -> Vec<Case> {
         code: 2,
         names: vec![bad_mesh, "line".into()],
     });
+    // a quadrilateral whose third corner turns back inside it: refused at its line, by label
+    let folded = f.file(
+        "folded.inp",
+        b"*NODE\n1, 0, 0, 0\n2, 100, 0, 0\n3, 20, 20, 0\n4, 0, 100, 0\n\
+          *ELEMENT, TYPE=S4R\n7, 1, 2, 3, 4\n",
+    );
+    let on_folded = f.file_blank("scenario-folded-quad", &folded);
+    cases.push(Case {
+        name: "mesh file with a folded quadrilateral".into(),
+        args: run(&on_folded, &[], "folded-quad"),
+        code: 2,
+        names: vec![
+            folded,
+            "line 7".into(),
+            "element 7".into(),
+            "not convex".into(),
+        ],
+    });
     let drape = |extra: &[&str], out: &str| {
         let mut args = vec!["drape".to_string(), example.clone()];
         args.extend(extra.iter().map(|s| s.to_string()));

@@ -122,8 +122,8 @@ fn the_formed_blank_runs_in_calculix() {
     assert!(frd.contains("DISP"), "no displacements in job.frd");
 }
 
-/// A flat 10 x 10 mm plate of two S3 elements written with a thickness of 0.5 mm and the warp
-/// along x, then along y, in an orthotropic material (E1 = 100 GPa, E2 = 1 GPa, no Poisson
+/// A flat 10 x 10 mm plate of two S3 elements, then of one S4R, written with a thickness of
+/// 0.5 mm and the warp along x, then along y, in an orthotropic material (E1 = 100 GPa, E2 = 1 GPa, no Poisson
 /// effect), clamped on its left edge and pulled by 10 N on each right node: CalculiX's
 /// stretch is F L / (E t W) with the E of the warp's direction and the written thickness,
 /// 4e-4 mm then 4e-2 mm. (CalculiX 2.20 applies only the default line of an orientation
@@ -133,10 +133,15 @@ fn calculix_takes_each_elements_orientation_and_thickness() {
     if !ccx_available("calculix_takes_each_elements_orientation_and_thickness") {
         return;
     }
-    let mesh = rectangle(10.0, 10.0, 1, 1, DiagonalPattern::Right);
-    let n = mesh.triangles.len();
-    for (warp, modulus) in [(Vector3::x(), 100e3), (Vector3::y(), 1e3)] {
-        let dir = scratch_dir("export_calculix", &format!("plate-{modulus}"));
+    for (pattern, warp, modulus) in [
+        (DiagonalPattern::Right, Vector3::x(), 100e3),
+        (DiagonalPattern::Right, Vector3::y(), 1e3),
+        (DiagonalPattern::Quad, Vector3::x(), 100e3),
+        (DiagonalPattern::Quad, Vector3::y(), 1e3),
+    ] {
+        let mesh = rectangle(10.0, 10.0, 1, 1, pattern);
+        let n = mesh.cells.len();
+        let dir = scratch_dir("export_calculix", &format!("plate-{pattern:?}-{modulus}"));
         write_inp(
             &dir.join("plate.inp"),
             &mesh,
@@ -156,6 +161,16 @@ fn calculix_takes_each_elements_orientation_and_thickness() {
              *NODE PRINT, NSET=right\nU\n*END STEP\n",
         )
         .unwrap();
+        let kind = if pattern == DiagonalPattern::Quad {
+            "S4R"
+        } else {
+            "S3"
+        };
+        let plate = std::fs::read_to_string(dir.join("plate.inp")).unwrap();
+        assert!(
+            plate.contains(&format!("*ELEMENT, TYPE={kind}\n")),
+            "{plate}"
+        );
         run_ccx(&dir);
         let dat = std::fs::read_to_string(dir.join("job.dat")).unwrap();
         let u = dat_rows(&dat, "displacements");
@@ -164,7 +179,7 @@ fn calculix_takes_each_elements_orientation_and_thickness() {
         for [ux, _, _] in u {
             assert!(
                 (ux - expected).abs() < 1e-6 * expected,
-                "warp {warp:?}: stretch {ux} mm, expected {expected} mm"
+                "{kind}, warp {warp:?}: stretch {ux} mm, expected {expected} mm"
             );
         }
     }

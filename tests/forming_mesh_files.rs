@@ -4,9 +4,11 @@
 //! built-in blank and tools within 0.5° in every element.
 //!
 //! The blank files are `tests/data/meshes/hemisphere-blank-10mm.{msh,inp}` (10 mm quadrilaterals,
-//! made by `make_hemisphere_blanks.py` there, with their own node and element numbering); the
-//! STL files are the built-in tool surfaces written by this test. The built-in run's formed
-//! blank, exported for a structural analysis, is read back as well.
+//! made by `make_hemisphere_blanks.py` there, with their own node and element numbering), read
+//! as quadrilaterals and so compared with the built-in blank of pattern `quad`; the
+//! STL files are the built-in tool surfaces written by this test. The built-in runs' formed
+//! blanks (triangles and quadrilaterals: S3 and S4R), exported for a structural analysis, are
+//! read back as well.
 
 mod common;
 
@@ -32,6 +34,8 @@ fn scenario_text(blank: &str, tools: &str) -> String {
 }
 
 const RECTANGLE: &str = "width = 160.0\nlength = 160.0\nelement_size = 10.0";
+const QUAD_RECTANGLE: &str =
+    "width = 160.0\nlength = 160.0\nelement_size = 10.0\npattern = \"quad\"";
 const BUILT_IN_TOOLS: &str = "shape = \"hemisphere\"\npunch_radius = 40.0\n\
     die_opening_radius = 42.0\ndie_fillet_radius = 5.0\nresolution = 3.0";
 
@@ -78,14 +82,13 @@ fn check_export(dir: &Path, run: &Formed) {
             "{x:?} read back as {back:?}"
         );
     }
-    assert_eq!(mesh.triangles, model.mesh.triangles);
+    assert_eq!(mesh.cells, model.mesh.cells);
     let warp = mesh.warp_directions.as_ref().unwrap();
     for (k, e) in model.elements.iter().enumerate() {
         assert_eq!(deck.thickness[k], Some(run.state.membrane[k].thickness));
         let formed = (e.gradient(&run.state.positions) * e.fibres.warp.xy()).normalize();
         assert!((warp[k].normalize() - formed).norm() < 1e-12, "element {k}");
-        let [a, b, c] = mesh.triangles[k].map(|n| mesh.nodes[n]);
-        let normal = (b - a).cross(&(c - a)).normalize();
+        let normal = mesh.cells[k].area_vector(&mesh.nodes).normalize();
         assert!(
             warp[k].dot(&normal).abs() < 1e-12,
             "element {k}: warp off its plane"
@@ -115,11 +118,36 @@ fn imported_blanks_and_tools_form_like_the_built_in_ones() {
     println!("built-in: largest shear {largest:.2}°");
     assert!(largest > 5.0, "too little shear to compare: {largest}°");
 
+    // the files' quadrilaterals against the built-in blank in quadrilaterals
+    let quads = load(
+        &dir,
+        "built-in-quad.toml",
+        &scenario_text(QUAD_RECTANGLE, BUILT_IN_TOOLS),
+    );
+    let quad_run = formed(&quads);
+    check_export(&scratch_dir("forming", "mesh-files-quad"), &quad_run);
+    assert!(quad_run
+        .forming
+        .model
+        .mesh
+        .cells
+        .iter()
+        .all(|c| c.is_quad()));
+    let quad_reference = &quad_run.shear;
+    let largest = quad_reference.iter().map(|r| r.1.abs()).fold(0.0, f64::max);
+    println!("built-in, quadrilaterals: largest shear {largest:.2}°");
+    assert!(largest > 5.0, "too little shear to compare: {largest}°");
     for file in ["hemisphere-blank-10mm.msh", "hemisphere-blank-10mm.inp"] {
         let mesh = repo_path(&format!("tests/data/meshes/{file}"));
         let blank = format!("mesh = {:?}", mesh);
         let scenario = load(&dir, "mesh.toml", &scenario_text(&blank, BUILT_IN_TOOLS));
-        let difference = largest_difference(reference, &formed(&scenario).shear);
+        let run = formed(&scenario);
+        assert_eq!(
+            run.forming.model.mesh.cells.len(),
+            256,
+            "{file}: one cell per element"
+        );
+        let difference = largest_difference(quad_reference, &run.shear);
         println!("{file}: largest difference {difference:.2e}°");
         assert!(difference < 0.5, "{file}: {difference}°");
     }

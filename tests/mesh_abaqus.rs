@@ -11,7 +11,7 @@ use thermostamp::mesh::abaqus::{
     parse_inp, read_inp, read_inp_with_thickness, write_inp, write_inp_to, AbaqusMesh,
     ElementOutput, MAX_FIELD,
 };
-use thermostamp::mesh::{rectangle, DiagonalPattern, Mesh, MeshFileError};
+use thermostamp::mesh::{rectangle, Cell, DiagonalPattern, Mesh, MeshFileError};
 
 /// Reads the first of `files` (path, text), the others being what it may include.
 fn parse(files: &[(&str, &str)]) -> Result<AbaqusMesh, MeshFileError> {
@@ -40,8 +40,9 @@ fn written(mesh: &Mesh, elements: Option<&ElementOutput>) -> String {
     String::from_utf8(bytes).unwrap()
 }
 
-fn patterns() -> [DiagonalPattern; 3] {
+fn patterns() -> [DiagonalPattern; 4] {
     [
+        DiagonalPattern::Quad,
         DiagonalPattern::Right,
         DiagonalPattern::Alternating,
         DiagonalPattern::Crossed,
@@ -59,7 +60,7 @@ fn awkward_rectangle(pattern: DiagonalPattern) -> Mesh {
             1e-3 * (x.x * x.x + x.y * x.y) / 7.0 + k as f64 * 1e-13,
         );
     }
-    let n = mesh.triangles.len();
+    let n = mesh.cells.len();
     mesh.element_sets
         .insert("half".to_string(), (0..n / 2).rev().collect());
     mesh.element_sets
@@ -69,12 +70,11 @@ fn awkward_rectangle(pattern: DiagonalPattern) -> Mesh {
     mesh
 }
 
-/// A warp direction per triangle: in the plane, of any length, turning across the mesh.
+/// A warp direction per cell: in its plane, of any length, turning across the mesh.
 fn warp(mesh: &Mesh) -> Vec<Vector3<f64>> {
-    (0..mesh.triangles.len())
+    (0..mesh.cells.len())
         .map(|t| {
-            let [a, b, c] = mesh.triangles[t].map(|n| mesh.nodes[n]);
-            let normal = (b - a).cross(&(c - a)).normalize();
+            let normal = mesh.cells[t].area_vector(&mesh.nodes).normalize();
             let angle = 0.37 * t as f64;
             let d = Vector3::new(angle.cos(), angle.sin(), 0.0) * (1.0 + t as f64);
             d - normal * normal.dot(&d)
@@ -105,7 +105,7 @@ fn assert_same_mesh(read: &AbaqusMesh, mesh: &Mesh, warp: Option<&[Vector3<f64>]
             assert_read_back(p[k], q[k]);
         }
     }
-    assert_eq!(back.triangles, mesh.triangles);
+    assert_eq!(back.cells, mesh.cells);
     assert_eq!(back.node_sets, mesh.node_sets);
     assert_eq!(back.element_sets, mesh.element_sets);
     match (warp, &back.warp_directions) {
@@ -154,7 +154,7 @@ fn rectangles_of_every_pattern_round_trip_with_warp_and_thickness_of_a_formed_bl
         let mesh = awkward_rectangle(pattern);
         let output = ElementOutput {
             warp: warp(&mesh),
-            thickness: (0..mesh.triangles.len())
+            thickness: (0..mesh.cells.len())
                 .map(|t| 0.31 * (1.0 + 0.01 * (t as f64).sin()))
                 .collect(),
         };
@@ -173,7 +173,7 @@ fn round_trip_through_files_on_disk() {
     let mesh = awkward_rectangle(DiagonalPattern::Crossed);
     let output = ElementOutput {
         warp: warp(&mesh),
-        thickness: vec![0.29; mesh.triangles.len()],
+        thickness: vec![0.29; mesh.cells.len()],
     };
     write_inp(&path, &mesh, Some(&output)).unwrap();
     let read = read_inp_with_thickness(&path).unwrap();
@@ -185,7 +185,7 @@ fn round_trip_through_files_on_disk() {
 #[test]
 fn the_writer_refuses_what_abaqus_cannot_hold() {
     let mut mesh = rectangle(10.0, 10.0, 2, 2, DiagonalPattern::Right);
-    let n = mesh.triangles.len();
+    let n = mesh.cells.len();
     let bad = |mesh: &Mesh, output: Option<&ElementOutput>| {
         let mut sink = Vec::new();
         write_inp_to(&mut sink, "out.inp", mesh, output)
@@ -210,7 +210,7 @@ fn the_writer_refuses_what_abaqus_cannot_hold() {
             thickness: vec![0.3; n],
         }),
     );
-    assert!(e.contains("normal to the triangle"), "{e}");
+    assert!(e.contains("normal to the element"), "{e}");
     mesh.node_sets.insert("TOP".to_string(), vec![0]);
     let e = bad(&mesh, None);
     assert!(e.contains("differ only in case"), "{e}");
@@ -260,39 +260,36 @@ fn s4r_quadrilaterals_with_sets_and_generate() {
     let mesh = &read.import.mesh;
     // node 200 belongs to no element: dropped
     assert_eq!(mesh.nodes.len(), 6);
-    assert_eq!(mesh.nodes[0], Vector3::new(2.0, 1.0, 0.0)); // label 105, first in the file
-                                                            // element 13 (file order first), then element 11, two triangles each
-    assert_eq!(mesh.triangles.len(), 4);
+    // label 105, first in the file
+    assert_eq!(mesh.nodes[0], Vector3::new(2.0, 1.0, 0.0));
     let index = |label: usize| {
         [105, 101, 102, 103, 104, 106]
             .iter()
             .position(|&l| l == label)
             .unwrap()
     };
+    // element 13 (file order first), then element 11, one quadrilateral each, the corners in
+    // the element's order
     let quad13 = [102, 103, 105, 106].map(index);
-    for t in &mesh.triangles[0..2] {
-        assert!(t.iter().all(|n| quad13.contains(n)), "{t:?}");
-    }
-    for t in &mesh.triangles {
-        let [a, b, c] = t.map(|n| mesh.nodes[n]);
-        assert!((b - a).cross(&(c - a)).z > 0.0, "orientation kept: {t:?}");
+    let quad11 = [101, 102, 106, 104].map(index);
+    assert_eq!(mesh.cells, vec![Cell::Quad(quad13), Cell::Quad(quad11)]);
+    for cell in &mesh.cells {
+        assert!(cell.area_vector(&mesh.nodes).z > 0.0, "orientation kept");
+        assert!((cell.area(&mesh.nodes) - 1.0).abs() < 1e-15);
     }
     let set = |name: &str| mesh.node_sets[name].clone();
     assert_eq!(set("Corner"), vec![index(101)]);
     assert_eq!(set("Bottom"), [101, 102, 103].map(index));
     assert_eq!(set("EDGE"), [101, 104, 102, 103].map(index));
     assert_eq!(set("Odd"), [101, 103, 105].map(index));
-    assert_eq!(set("OnSecond"), quad13);
+    assert_eq!(set("OnSecond"), [102, 103, 105, 106].map(index));
     assert_eq!(set("NALL").len(), 6);
     assert_eq!(set("Spare"), vec![index(101)]);
-    assert_eq!(mesh.element_sets["Plate"], vec![0, 1, 2, 3]);
-    assert_eq!(mesh.element_sets["First"], vec![2, 3, 0, 1]);
-    assert_eq!(mesh.element_sets["Second"], vec![0, 1]);
+    assert_eq!(mesh.element_sets["Plate"], vec![0, 1]);
+    assert_eq!(mesh.element_sets["First"], vec![1, 0]);
+    assert_eq!(mesh.element_sets["Second"], vec![0]);
     let notes = read.import.notes.join("\n");
-    assert!(
-        notes.contains("2 quadrilaterals (S4R: 2) split into 4 triangles"),
-        "{notes}"
-    );
+    assert!(!notes.contains("split"), "{notes}");
     assert!(
         notes.contains("1 node used by no element dropped"),
         "{notes}"
@@ -303,6 +300,76 @@ fn s4r_quadrilaterals_with_sets_and_generate() {
     );
     assert!(notes.contains("*HEADING (line 1)"), "{notes}");
     assert!(read.import.mesh.warp_directions.is_none());
+}
+
+#[test]
+fn quadrilaterals_of_every_shell_and_membrane_type_are_one_cell_each() {
+    for kind in ["S4", "S4R", "M3D4", "M3D4R"] {
+        let read = deck(&format!(
+            "{NODES}5, 2, 0, 0\n6, 2, 1, 0\n*ELEMENT, TYPE={kind}, ELSET=P\n\
+             7, 1, 2, 3, 4\n8, 2, 5, 6, 3\n*SHELL SECTION, ELSET=P, MATERIAL=M\n0.4\n"
+        ));
+        let mesh = &read.import.mesh;
+        assert_eq!(
+            mesh.cells,
+            vec![Cell::Quad([0, 1, 2, 3]), Cell::Quad([1, 4, 5, 2])],
+            "{kind}"
+        );
+        assert_eq!(mesh.element_sets["P"], vec![0, 1], "{kind}");
+        assert_eq!(read.thickness, vec![Some(0.4); 2], "{kind}");
+        assert_eq!(read.import.rigid, vec![false; 2], "{kind}");
+        assert!((mesh.total_area() - 2.0).abs() < 1e-15, "{kind}");
+    }
+}
+
+/// The awkward 5 x 3 quadrilaterals with cells 1, 5 and 6 cut in two triangles: runs of
+/// each kind, in the order of the cells.
+fn mixed_cells() -> Mesh {
+    let mut mesh = awkward_rectangle(DiagonalPattern::Quad);
+    mesh.cells = mesh
+        .cells
+        .iter()
+        .enumerate()
+        .flat_map(|(k, cell)| match k {
+            1 | 5 | 6 => cell.triangles().into_iter().map(Cell::Triangle).collect(),
+            _ => vec![*cell],
+        })
+        .collect();
+    let n = mesh.cells.len();
+    mesh.element_sets
+        .insert("half".to_string(), (0..n / 2).rev().collect());
+    mesh.element_sets
+        .insert("Every-Third".to_string(), (0..n).step_by(3).collect());
+    mesh
+}
+
+#[test]
+fn triangles_and_quadrilaterals_in_one_mesh_round_trip_in_their_order() {
+    let mesh = mixed_cells();
+    mesh.validate().unwrap();
+    let output = ElementOutput {
+        warp: warp(&mesh),
+        thickness: (0..mesh.cells.len())
+            .map(|t| 0.3 + 0.001 * t as f64)
+            .collect(),
+    };
+    let text = written(&mesh, Some(&output));
+    // a block per run: S4R (cell 0), S3 (1-2), S4R (3-5), S3 (6-9), S4R (10-17)
+    let blocks: Vec<&str> = text.lines().filter(|l| l.starts_with("*ELEMENT")).collect();
+    assert_eq!(
+        blocks,
+        [
+            "*ELEMENT, TYPE=S4R",
+            "*ELEMENT, TYPE=S3",
+            "*ELEMENT, TYPE=S4R",
+            "*ELEMENT, TYPE=S3",
+            "*ELEMENT, TYPE=S4R"
+        ]
+    );
+    let read = deck(&text);
+    assert_same_mesh(&read, &mesh, Some(&output.warp));
+    let thickness: Vec<f64> = read.thickness.iter().map(|t| t.unwrap()).collect();
+    assert_eq!(thickness, output.thickness);
 }
 
 #[test]
@@ -320,7 +387,8 @@ fn nested_includes_relative_to_the_including_file() {
     ])
     .unwrap();
     assert_eq!(read.import.mesh.nodes.len(), 4);
-    assert_eq!(read.import.mesh.triangles, vec![[0, 1, 2], [0, 2, 3]]);
+    let two = vec![Cell::Triangle([0, 1, 2]), Cell::Triangle([0, 2, 3])];
+    assert_eq!(read.import.mesh.cells, two);
 
     // the same on disk, through read_inp
     let folder = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("mesh_abaqus_includes");
@@ -337,7 +405,7 @@ fn nested_includes_relative_to_the_including_file() {
     .unwrap();
     std::fs::write(folder.join("mesh/more/top.inp"), "3, 1, 1, 0\n4, 0, 1, 0\n").unwrap();
     let on_disk = read_inp(&folder.join("main.inp")).unwrap();
-    assert_eq!(on_disk.mesh.triangles, vec![[0, 1, 2], [0, 2, 3]]);
+    assert_eq!(on_disk.mesh.cells, two);
 
     // INPUT= on *ELEMENT (and *NODE, *NSET, *ELSET, *DISTRIBUTION): data lines from a file
     let read = parse(&[
@@ -365,7 +433,7 @@ fn nested_includes_relative_to_the_including_file() {
         ),
     ])
     .unwrap();
-    assert_eq!(read.import.mesh.triangles, vec![[0, 1, 2], [0, 2, 3]]);
+    assert_eq!(read.import.mesh.cells, two);
     assert_eq!(read.import.mesh.node_sets["A"], vec![3]);
     let e = parse(&[
         (
@@ -413,26 +481,22 @@ const ORIENTED: &str = "\
 #[test]
 fn orientations_through_sections_give_the_warp_directions() {
     let read = deck(ORIENTED);
+    // one warp direction per element: the quadrilateral, then the two triangles
     let warp = read.import.mesh.warp_directions.clone().unwrap();
-    assert_eq!(warp.len(), 4);
+    assert_eq!(warp.len(), 3);
+    assert!(read.import.mesh.cells[0].is_quad());
     let ply = Vector3::new(30f64.to_radians().cos(), 30f64.to_radians().sin(), 0.0);
-    assert!(
-        (warp[0] - ply).norm() < 1e-15 && (warp[1] - ply).norm() < 1e-15,
-        "{warp:?}"
-    );
+    assert!((warp[0] - ply).norm() < 1e-15, "{warp:?}");
     let diagonal = Vector3::new(1.0, 1.0, 0.0).normalize();
-    assert!((warp[2] - diagonal).norm() < 1e-15, "{warp:?}");
+    assert!((warp[1] - diagonal).norm() < 1e-15, "{warp:?}");
     // no section: the global x axis, with a note
-    assert_eq!(warp[3], Vector3::x());
+    assert_eq!(warp[2], Vector3::x());
     let notes = read.import.notes.join("\n");
     assert!(
         notes.contains("1 of 3 shell and membrane elements have no orientation (elements 3)"),
         "{notes}"
     );
-    assert_eq!(
-        read.thickness,
-        vec![Some(0.31), Some(0.31), Some(0.5), None]
-    );
+    assert_eq!(read.thickness, vec![Some(0.31), Some(0.5), None]);
 }
 
 #[test]
@@ -444,8 +508,9 @@ fn rigid_elements_are_flagged() {
          *ELEMENT, TYPE=R3D3, ELSET=TOOL\n11, 5, 7, 8\n\
          *RIGID BODY, REF NODE=5, ELSET=TOOL\n",
     );
-    assert_eq!(read.import.rigid, vec![false, false, true, true, true]);
-    assert_eq!(read.import.mesh.element_sets["TOOL"], vec![2, 3, 4]);
+    assert_eq!(read.import.rigid, vec![false, false, true, true]);
+    assert_eq!(read.import.mesh.element_sets["TOOL"], vec![2, 3]);
+    assert_eq!(read.import.mesh.cells[2], Cell::Quad([4, 5, 6, 7]));
     let notes = read.import.notes.join("\n");
     assert!(notes.contains("2 rigid elements"), "{notes}");
     assert!(notes.contains("*RIGID BODY (line 17)"), "{notes}");
@@ -487,12 +552,12 @@ fn a_single_part_with_its_instance_is_read() {
     let read = read_inp_with_thickness(&path).unwrap();
     let mesh = &read.import.mesh;
     assert_eq!(mesh.nodes.len(), 441);
-    assert_eq!(mesh.triangles.len(), 800);
-    let area: f64 = (0..mesh.triangles.len()).map(|t| mesh.area(t)).sum();
+    assert_eq!(mesh.cells.len(), 400);
+    let area: f64 = (0..mesh.cells.len()).map(|t| mesh.area(t)).sum();
     assert!((area - 160.0 * 160.0).abs() < 1e-9, "{area}");
-    for t in &mesh.triangles {
-        let [a, b, c] = t.map(|n| mesh.nodes[n]);
-        assert!((b - a).cross(&(c - a)).z > 0.0);
+    for cell in &mesh.cells {
+        assert!(cell.is_quad() && cell.area_vector(&mesh.nodes).z > 0.0);
+        assert!((cell.area(&mesh.nodes) - 64.0).abs() < 1e-9);
     }
     let edge = |name: &str, coordinate: usize, value: f64| {
         let set = &mesh.node_sets[name];
@@ -508,7 +573,8 @@ fn a_single_part_with_its_instance_is_read() {
     edge("RIGHT", 0, 80.0);
     assert_eq!(mesh.node_sets["EDGES"].len(), 80);
     assert_eq!(mesh.node_sets["CORNERS"].len(), 4);
-    assert_eq!(mesh.element_sets["BLANK"].len(), 800);
+    assert_eq!(mesh.element_sets["BLANK"].len(), 400);
+    assert_eq!(read.thickness.len(), 400);
     assert!(mesh
         .warp_directions
         .as_ref()
@@ -565,6 +631,8 @@ fn malformed_decks_fail_naming_the_file_and_line() {
         with_nodes("*ELEMENT, TYPE=S3, ELSET=ALL\n1, 1, 2, 3\n*SHELL SECTION, ELSET=ALL, MATERIAL=M, SHELL THICKNESS=T\n\n*DISTRIBUTION, NAME=T, LOCATION=ELEMENT, TABLE=TT\n, 0.3\n"),
         "*NODE\n1, 0, 0, 0\n2, 1e400, 0, 0\n".to_string(),
         "*NODE\n".to_string(),
+        with_nodes("5, 0.2, 0.2, 0\n*ELEMENT, TYPE=S4R\n3, 1, 2, 5, 4\n"),
+        with_nodes("*ELEMENT, TYPE=M3D4\n3, 1, 2, 4, 3\n"),
     ];
     let cases: Vec<Case> = vec![
         (
@@ -734,6 +802,18 @@ fn malformed_decks_fail_naming_the_file_and_line() {
             &["no elements"],
         ),
         (
+            "re-entrant quadrilateral",
+            vec![("d.inp", &texts[26])],
+            ("d.inp", Some(8)),
+            &["element 3", "quadrilateral that is not convex"],
+        ),
+        (
+            "crossed quadrilateral (its diagonals parallel)",
+            vec![("d.inp", &texts[27])],
+            ("d.inp", Some(7)),
+            &["element 3", "degenerate"],
+        ),
+        (
             "error inside an included file",
             vec![
                 ("d.inp", "*INCLUDE, INPUT=inc/mesh.inp\n"),
@@ -749,10 +829,7 @@ fn malformed_decks_fail_naming_the_file_and_line() {
     let mut failures = Vec::new();
     for (what, files, (file, line), words) in cases {
         match parse(&files) {
-            Ok(m) => failures.push(format!(
-                "{what}: read {} triangles",
-                m.import.mesh.triangles.len()
-            )),
+            Ok(m) => failures.push(format!("{what}: read {} cells", m.import.mesh.cells.len())),
             Err(e) => {
                 if (e.file.as_str(), e.line) != (file, line)
                     || !words.iter().all(|w| e.message.contains(w))
@@ -802,7 +879,7 @@ fn labels_are_renumbered_in_file_order() {
         read.import.mesh.nodes,
         vec![Vector3::zeros(), Vector3::x(), Vector3::new(1.0, 1.0, 0.0)]
     );
-    assert_eq!(read.import.mesh.triangles, vec![[0, 1, 2]]);
+    assert_eq!(read.import.mesh.cells, vec![Cell::Triangle([0, 1, 2])]);
     assert_eq!(read.import.mesh.node_sets, BTreeMap::new());
 }
 
@@ -813,7 +890,7 @@ fn valid_deck() -> String {
     let mesh = rectangle(20.0, 10.0, 2, 2, DiagonalPattern::Alternating);
     let output = ElementOutput {
         warp: warp(&mesh),
-        thickness: vec![0.3; mesh.triangles.len()],
+        thickness: vec![0.3; mesh.cells.len()],
     };
     format!(
         "{}{QUADS}*INCLUDE, INPUT=self.inp\n*ORIENTATION, NAME=P\n1, 0, 0, 0, 1, 0\n3, 30\n\
@@ -837,7 +914,7 @@ const SELF: &str = "*NODE\n1000, 0, 0, 0\n";
 #[test]
 fn the_deck_that_the_property_test_mutates_is_valid() {
     let read = parse(&[("d.inp", &valid_deck()), ("self.inp", SELF)]).unwrap();
-    assert_eq!(read.import.mesh.triangles.len(), 8 + 4);
+    assert_eq!(read.import.mesh.cells.len(), 8 + 2);
     assert!(read.thickness.iter().all(|t| *t == Some(0.3)));
 }
 
@@ -873,17 +950,20 @@ proptest! {
         jitter in prop::collection::vec(-0.2f64..0.2, 12),
         warp in prop::collection::vec(any_magnitude(), 6),
         thickness in prop::collection::vec(any_magnitude(), 2),
+        quad in any::<bool>(),
     ) {
-        // a unit square of two triangles, its corners moved by up to 0.2 in x, y and z (so
-        // that no triangle degenerates), at any scale
-        let mut mesh = rectangle(1.0, 1.0, 1, 1, DiagonalPattern::Right);
+        // a unit square of two triangles or one quadrilateral, its corners moved by up to 0.2
+        // in x, y and z (so that no cell degenerates), at any scale
+        let pattern = if quad { DiagonalPattern::Quad } else { DiagonalPattern::Right };
+        let mut mesh = rectangle(1.0, 1.0, 1, 1, pattern);
+        let cells = mesh.cells.len();
         for (n, x) in mesh.nodes.iter_mut().enumerate() {
             *x = (*x + Vector3::from_column_slice(&jitter[3 * n..3 * n + 3])) * scale;
         }
         prop_assume!(mesh.validate().is_ok());
         let output = ElementOutput {
-            warp: warp.chunks(3).map(Vector3::from_column_slice).collect(),
-            thickness: thickness.iter().map(|t| t.abs()).collect(),
+            warp: warp.chunks(3).take(cells).map(Vector3::from_column_slice).collect(),
+            thickness: thickness.iter().take(cells).map(|t| t.abs()).collect(),
         };
         let mut bytes = Vec::new();
         prop_assume!(write_inp_to(&mut bytes, "out.inp", &mesh, Some(&output)).is_ok());
@@ -900,6 +980,7 @@ proptest! {
             }
         }
         let read = deck(&text);
+        prop_assert_eq!(&read.import.mesh.cells, &mesh.cells);
         for (p, q) in read.import.mesh.nodes.iter().zip(&mesh.nodes) {
             for k in 0..3 {
                 assert_read_back(p[k], q[k]);

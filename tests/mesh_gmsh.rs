@@ -9,10 +9,9 @@ use nalgebra::Vector3;
 use proptest::prelude::*;
 use std::collections::BTreeMap;
 use thermostamp::mesh::gmsh::{parse_msh, read_msh, write_msh, write_msh_to};
-use thermostamp::mesh::{rectangle, DiagonalPattern, Mesh, MeshFileError, MeshImport};
+use thermostamp::mesh::{rectangle, Cell, DiagonalPattern, Mesh, MeshFileError, MeshImport};
 
-/// A square of two quadrangles (its middle nodes pulled aside so that each quadrangle has a
-/// shorter diagonal), sparse and unordered node tags, an unused node (99), a named curve group
+/// A square of two quadrangles (its middle nodes pulled aside: two trapezia), sparse and unordered node tags, an unused node (99), a named curve group
 /// (`clamped`, the left edge), an unnamed point group (7, node 60) and a named surface group.
 const SQUARE: &str = "\
 $MeshFormat
@@ -145,7 +144,7 @@ fn sets(entries: &[(&str, &[usize])]) -> BTreeMap<String, Vec<usize>> {
 }
 
 /// What [`SQUARE`] reads to: nodes in file order without the unused node 99 (60, 40, 10, 30,
-/// 50, 20 become 0..5), each quadrangle split along its shorter diagonal.
+/// 50, 20 become 0..5), each quadrangle one cell with its corners in the file's order.
 fn square_expected() -> Mesh {
     Mesh {
         nodes: vec![
@@ -156,15 +155,14 @@ fn square_expected() -> Mesh {
             Vector3::new(0.6, 1.0, 0.0),
             Vector3::new(0.4, 0.0, 0.0),
         ],
-        // quadrangle 21 (10 20 50 40): diagonal 20-40 is shorter than 10-50;
-        // quadrangle 22 (20 30 60 50): diagonal 30-50 is shorter than 20-60
-        triangles: vec![[2, 5, 1], [5, 4, 1], [5, 3, 4], [3, 0, 4]],
+        // quadrangle 21 (10 20 50 40) and quadrangle 22 (20 30 60 50)
+        cells: vec![Cell::Quad([2, 5, 4, 1]), Cell::Quad([5, 3, 0, 4])],
         node_sets: sets(&[
             ("clamped", &[1, 2]),
             ("physical 7", &[0]),
             ("sheet", &[0, 1, 2, 3, 4, 5]),
         ]),
-        element_sets: sets(&[("sheet", &[0, 1, 2, 3])]),
+        element_sets: sets(&[("sheet", &[0, 1])]),
         warp_directions: None,
     }
 }
@@ -177,23 +175,22 @@ fn parse(bytes: &[u8]) -> MeshImport {
 }
 
 #[test]
-fn a_hand_written_ascii_file_reads_to_the_expected_triangles_and_sets() {
+fn a_hand_written_ascii_file_reads_to_the_expected_quadrangles_and_sets() {
     let import = parse(SQUARE.as_bytes());
     assert_eq!(import.mesh, square_expected());
-    assert_eq!(import.rigid, vec![false; 4]);
+    assert_eq!(import.rigid, vec![false; 2]);
     let notes = import.notes.join("\n");
-    assert!(notes.contains("2 quadrangles split"), "{notes}");
+    assert!(!notes.contains("split"), "{notes}");
+    assert_eq!(import.notes.len(), 1, "{notes}");
     assert!(
         notes.contains("1 nodes used by no triangle") && notes.contains("99"),
         "{notes}"
     );
     assert!(!notes.contains("oriented"), "{notes}");
-    // counter-clockwise about +z, as the quadrangles were
+    // counter-clockwise about +z, as in the file; the two trapezia fill the unit square
     let m = &import.mesh;
-    for t in &m.triangles {
-        let [a, b, c] = t.map(|n| m.nodes[n]);
-        assert!((b - a).cross(&(c - a)).z > 0.0);
-    }
+    assert!(m.cells.iter().all(|c| c.area_vector(&m.nodes).z > 0.0));
+    assert!((m.area(0) - 0.5).abs() < 1e-15 && (m.area(1) - 0.5).abs() < 1e-15);
 }
 
 #[test]
@@ -219,7 +216,7 @@ fn fixture(name: &str) -> MeshImport {
 
 /// Files written by Gmsh 4.15.2 from the `.geo` files beside them (docs/meshes.md).
 #[test]
-fn the_blank_of_the_hemisphere_example_from_gmsh_reads_as_800_triangles_with_its_groups() {
+fn the_blank_of_the_hemisphere_example_from_gmsh_reads_as_400_quadrangles_with_its_groups() {
     let import = fixture("hemisphere-blank.msh");
     let m = &import.mesh;
     // the same mesh saved by Gmsh as binary: exact coordinates there, 16 digits in ASCII
@@ -233,33 +230,24 @@ fn the_blank_of_the_hemisphere_example_from_gmsh_reads_as_800_triangles_with_its
         .all(|(p, q)| (p - q).amax() < 1e-12));
     assert!(b.nodes.iter().zip(&m.nodes).any(|(p, q)| p != q));
     assert!(b.node_sets == m.node_sets);
-    // the same quadrangles; but their cells are square, so which diagonal is "shorter" is
-    // decided by the last bits of the coordinates, which differ between the two files
-    let quad = |t: &[[usize; 3]], k: usize| {
-        let mut q: Vec<usize> = t[2 * k].iter().chain(&t[2 * k + 1]).copied().collect();
-        q.sort_unstable();
-        q.dedup();
-        q
-    };
-    assert!((0..400).all(|k| quad(&b.triangles, k) == quad(&m.triangles, k)));
+    // the same quadrangles, whatever the last bits of the coordinates
+    assert!(b.cells == m.cells);
     assert!(b.element_sets == m.element_sets && binary.notes == import.notes);
-    assert_eq!((m.nodes.len(), m.triangles.len()), (441, 800));
-    let area: f64 = (0..m.triangles.len()).map(|t| m.area(t)).sum();
+    assert_eq!((m.nodes.len(), m.cells.len()), (441, 400));
+    assert!(m.cells.iter().all(Cell::is_quad));
+    let area: f64 = (0..m.cells.len()).map(|t| m.area(t)).sum();
     assert!((area - 160.0 * 160.0).abs() < 1e-8, "{area}");
-    for t in &m.triangles {
-        let [a, b, c] = t.map(|n| m.nodes[n]);
-        assert!((b - a).cross(&(c - a)).z > 0.0);
-        // 8 mm cells: legs of 8 mm, diagonals of 8 sqrt(2) mm
-        for (p, q) in [(a, b), (b, c), (c, a)] {
-            let l = (q - p).norm();
-            assert!(
-                (l - 8.0).abs() < 1e-9 || (l - 8.0 * 2f64.sqrt()).abs() < 1e-9,
-                "{l}"
-            );
+    for cell in &m.cells {
+        assert!(cell.area_vector(&m.nodes).z > 0.0);
+        // 8 mm square cells
+        for (p, q) in cell.edges() {
+            let l = (m.nodes[q] - m.nodes[p]).norm();
+            assert!((l - 8.0).abs() < 1e-9, "{l}");
         }
+        assert!((cell.area(&m.nodes) - 64.0).abs() < 1e-9);
     }
     assert_eq!(m.element_sets.keys().collect::<Vec<_>>(), ["blank"]);
-    assert_eq!(m.element_sets["blank"], (0..800).collect::<Vec<_>>());
+    assert_eq!(m.element_sets["blank"], (0..400).collect::<Vec<_>>());
     assert_eq!(
         m.node_sets.keys().collect::<Vec<_>>(),
         ["blank", "clamped", "corner"]
@@ -271,23 +259,18 @@ fn the_blank_of_the_hemisphere_example_from_gmsh_reads_as_800_triangles_with_its
     let corner = m.node_set("corner").unwrap();
     assert_eq!(corner.len(), 1);
     assert_eq!(m.nodes[corner[0]], Vector3::new(-80.0, 80.0, 0.0));
-    assert_eq!(
-        import.notes,
-        ["400 quadrangles split into two triangles each, along their shorter diagonal"]
-    );
+    assert_eq!(import.notes, Vec::<String>::new());
 }
 
 #[test]
 fn an_unstructured_disk_from_gmsh_reads_with_its_rim() {
     let import = fixture("disk.msh");
     let m = &import.mesh;
-    assert_eq!((m.nodes.len(), m.triangles.len()), (411, 757));
+    assert_eq!((m.nodes.len(), m.cells.len()), (411, 757));
+    assert!(!m.has_quads());
     assert_eq!(import.notes, Vec::<String>::new());
-    for t in &m.triangles {
-        let [a, b, c] = t.map(|n| m.nodes[n]);
-        assert!((b - a).cross(&(c - a)).z > 0.0);
-    }
-    let area: f64 = (0..m.triangles.len()).map(|t| m.area(t)).sum();
+    assert!(m.cells.iter().all(|c| c.area_vector(&m.nodes).z > 0.0));
+    let area: f64 = (0..m.cells.len()).map(|t| m.area(t)).sum();
     let circle = std::f64::consts::PI * 60.0 * 60.0;
     assert!(area < circle && area > 0.99 * circle, "{area}");
     let rim = m.node_set("rim").unwrap();
@@ -300,7 +283,8 @@ fn an_unstructured_disk_from_gmsh_reads_with_its_rim() {
 fn a_solid_meshed_in_tetrahedra_gives_its_closed_outward_surface() {
     let import = fixture("box.msh");
     let m = &import.mesh;
-    assert_eq!(m.triangles.len(), 244);
+    assert_eq!(m.cells.len(), 244);
+    assert!(!m.has_quads());
     assert!(m.node_sets.is_empty() && m.element_sets.is_empty());
     // no orientation note: every edge runs once each way
     assert_eq!(
@@ -313,10 +297,12 @@ fn a_solid_meshed_in_tetrahedra_gives_its_closed_outward_surface() {
     );
     // enclosed volume by the divergence theorem: 10 x 20 x 5, positive for outward normals
     let volume: f64 = m
-        .triangles
+        .cells
         .iter()
         .map(|t| {
-            let [a, b, c] = t.map(|n| m.nodes[n]);
+            let [a, b, c] = t.positions(&m.nodes)[..] else {
+                panic!("{t:?} is not a triangle")
+            };
             a.dot(&b.cross(&c)) / 6.0
         })
         .sum();
@@ -332,6 +318,7 @@ fn round_trip(mesh: &Mesh) -> MeshImport {
 #[test]
 fn every_rectangle_pattern_survives_write_and_read_bit_for_bit() {
     for pattern in [
+        DiagonalPattern::Quad,
         DiagonalPattern::Right,
         DiagonalPattern::Alternating,
         DiagonalPattern::Crossed,
@@ -355,22 +342,59 @@ fn every_rectangle_pattern_survives_write_and_read_bit_for_bit() {
     }
 }
 
+/// A 4 x 3 mesh of quadrilaterals in which cells 1, 5 and 6 are cut in two triangles: runs of
+/// each kind, in the order of the cells.
+fn mixed_cells() -> Mesh {
+    let quads = rectangle(40.0, 30.0, 4, 3, DiagonalPattern::Quad);
+    let mut mesh = quads.clone();
+    mesh.cells = quads
+        .cells
+        .iter()
+        .enumerate()
+        .flat_map(|(k, cell)| match k {
+            1 | 5 | 6 => cell.triangles().into_iter().map(Cell::Triangle).collect(),
+            _ => vec![*cell],
+        })
+        .collect();
+    mesh.element_sets = sets(&[("mixed", &[0, 1, 2, 3, 7, 8]), ("quads", &[0, 3, 4])]);
+    mesh
+}
+
+#[test]
+fn triangles_and_quadrangles_in_one_mesh_keep_their_order_through_write_and_read() {
+    let mesh = mixed_cells();
+    mesh.validate().unwrap();
+    let quads = mesh.cells.iter().filter(|c| c.is_quad()).count();
+    assert_eq!((mesh.cells.len(), quads), (15, 9));
+    let mut text = Vec::new();
+    write_msh_to(&mut text, &mesh, "mixed.msh").unwrap();
+    let back = parse(&text);
+    let mut expected = mesh.clone();
+    for name in ["mixed", "quads"] {
+        let nodes = mesh.nodes_of_element_set(name).unwrap();
+        expected.node_sets.insert(name.to_string(), nodes);
+    }
+    assert_eq!(back.mesh, expected);
+    assert_eq!(back.notes, Vec::<String>::new());
+}
+
 #[test]
 fn overlapping_and_interleaved_element_sets_survive_write_and_read() {
     let mut mesh = rectangle(40.0, 30.0, 4, 3, DiagonalPattern::Alternating);
     mesh.nodes[5].z = -1.0 / 3.0;
-    let triangles = mesh.triangles.len();
+    let cells = mesh.cells.len();
     mesh.element_sets = sets(&[
-        ("even", &(0..triangles).step_by(2).collect::<Vec<_>>()),
-        ("first half", &(0..triangles / 2).collect::<Vec<_>>()),
+        ("even", &(0..cells).step_by(2).collect::<Vec<_>>()),
+        ("first half", &(0..cells / 2).collect::<Vec<_>>()),
         ("one", &[7]),
     ]);
     // the node set of an element set's name: here not that set's nodes
     mesh.node_sets.insert("one".to_string(), vec![0, 1]);
     // the node set of 'even' is its elements' nodes, which the reader rebuilds
-    let mut even: Vec<usize> = mesh.element_sets["even"]
-        .iter()
-        .flat_map(|&t| mesh.triangles[t])
+    let mut even: Vec<usize> = mesh
+        .nodes_of_element_set("even")
+        .unwrap()
+        .into_iter()
         .collect();
     even.sort_unstable();
     even.dedup();
@@ -379,7 +403,7 @@ fn overlapping_and_interleaved_element_sets_survive_write_and_read() {
     let back = round_trip(&mesh).mesh;
     let mut first_half: Vec<usize> = mesh.element_sets["first half"]
         .iter()
-        .flat_map(|&t| mesh.triangles[t])
+        .flat_map(|&t| mesh.cells[t].nodes().to_vec())
         .collect();
     first_half.sort_unstable();
     first_half.dedup();
@@ -420,7 +444,7 @@ fn the_writer_refuses_names_that_msh_cannot_hold_and_invalid_meshes() {
 }
 
 #[test]
-fn triangles_oriented_against_their_neighbours_get_a_note_naming_the_element() {
+fn elements_oriented_against_their_neighbours_get_a_note_naming_the_element() {
     // quadrangle 22 listed clockwise: 20 50 60 30
     let text = SQUARE.replace("22 20 30 60 50", "22 20 50 60 30");
     let import = parse(text.as_bytes());
@@ -445,7 +469,7 @@ fn groups_sharing_a_name_are_merged_by_the_documented_rule() {
     // the surface named 'clamped' too: its element set, the curve's and point's node set
     let text = text.replace("2 5 \"sheet\"", "2 5 \"clamped\"");
     let m = parse(text.as_bytes()).mesh;
-    assert_eq!(m.element_sets["clamped"], [0, 1, 2, 3]);
+    assert_eq!(m.element_sets["clamped"], [0, 1]);
     assert_eq!(m.node_sets["clamped"], [0, 1, 2]);
 }
 
@@ -580,10 +604,22 @@ fn malformed_ascii_files_name_the_file_the_line_and_what_was_expected() {
         Some(4),
         "never closed",
     );
-    // a quadrangle with a repeated node: a triangle of it has no area
-    let e = parse_msh(&replaced("22 20 30 60 50", "22 20 30 30 50"), "broken.msh").unwrap_err();
-    assert_eq!(e.file, "broken.msh");
-    assert!(e.message.contains("element 22 is degenerate"), "{e}");
+    // quadrangle 22 with a repeated node, crossing itself, re-entrant at node 50 (moved to
+    // (0.6, 0.3), where quadrangle 21 stays convex), of no area
+    let folded = "element 22 is a quadrilateral that is not convex";
+    for (bytes, error) in [
+        (replaced("22 20 30 60 50", "22 20 30 30 50"), folded),
+        (replaced("22 20 30 60 50", "22 20 30 50 60"), folded),
+        (replaced("0.6 1 0", "0.6 0.3 0"), folded),
+        (
+            replaced("22 20 30 60 50", "22 20 30 30 20"),
+            "element 22 is degenerate (area 0e0 mm^2)",
+        ),
+    ] {
+        let e = parse_msh(&bytes, "broken.msh").unwrap_err();
+        assert_eq!((e.file.as_str(), e.line), ("broken.msh", None), "{e}");
+        assert!(e.message.contains(error), "{e}");
+    }
     // no $Elements at all
     let text = &SQUARE[..SQUARE.find("$Elements").unwrap()];
     let e = parse_msh(text.as_bytes(), "broken.msh").unwrap_err();

@@ -1,6 +1,6 @@
 //! Every ParaView file the product writes, read by VTK itself (`tests/read_vtk.py`, the
 //! `vtk` Python package, whose XML reader is ParaView's): the frames of a forming run and
-//! their `.pvd`, the formed blank, the frames of a virtual test, and the drape preview. Point
+//! their `.pvd`, the formed blank (of triangles and of quadrilaterals), the frames of a virtual test, and the drape preview. Point
 //! and cell counts, array names (the same whatever the card's stack), component names, no
 //! NaN, the meanings of the `contact_status` codes, the frames' process times, and the drape
 //! preview's cells sharing their points.
@@ -145,8 +145,19 @@ fn sheet_arrays(contact: bool, stresses: &[&str]) -> BTreeMap<String, String> {
 }
 
 fn assert_grid(name: &str, grid: &Grid, counts: (usize, usize), arrays: &BTreeMap<String, String>) {
+    assert_cells(name, grid, counts, "5", arrays);
+}
+
+/// [`assert_grid`] with the VTK cell types expected: "5" triangles, "9" quadrilaterals.
+fn assert_cells(
+    name: &str,
+    grid: &Grid,
+    counts: (usize, usize),
+    types: &str,
+    arrays: &BTreeMap<String, String>,
+) {
     assert_eq!((grid.points, grid.cells), counts, "{name}");
-    assert_eq!(grid.types, "5", "{name}: not all triangles");
+    assert_eq!(grid.types, types, "{name}: VTK cell types");
     let got: BTreeMap<String, String> = grid
         .arrays
         .iter()
@@ -166,10 +177,11 @@ fn every_paraview_file_reads_in_vtk_as_written() {
     if !vtk_available(&dir) {
         return;
     }
-    for sub in ["run", "bias", "drape"] {
+    for sub in ["run", "quad", "bias", "drape"] {
         let _ = std::fs::remove_dir_all(dir.join(sub));
     }
     let (run, bias, drape) = (dir.join("run"), dir.join("bias"), dir.join("drape"));
+    let quad = dir.join("quad");
     // the hemisphere example on 10 mm cells, 4 mm of stroke at 10 mm/s, time scaling 10
     run_ok(&[
         "run",
@@ -185,6 +197,23 @@ fn every_paraview_file_reads_in_vtk_as_written() {
         "--output",
         run.to_str().unwrap(),
     ]);
+    // the same on quadrilaterals, one frame at the end
+    run_ok(&[
+        "run",
+        "examples/hemisphere.toml",
+        "--set",
+        "blank.element_size=10",
+        "--set",
+        "blank.pattern=quad",
+        "--set",
+        "process.stroke=4",
+        "--set",
+        "output.frames=1",
+        "--set",
+        "output.history_points=8",
+        "--output",
+        quad.to_str().unwrap(),
+    ]);
     // a dry fabric card (one fabric layer): the same stress array name as the prepreg's
     run_ok(
         &[
@@ -199,9 +228,12 @@ fn every_paraview_file_reads_in_vtk_as_written() {
         "--output",
         drape.to_str().unwrap(),
     ]);
+    let quad_blank = quad.join("quad-formed-blank.vtu");
+    std::fs::rename(quad.join("formed-blank.vtu"), &quad_blank).unwrap();
     let files = [
         run.join("forming.pvd"),
         run.join("formed-blank.vtu"),
+        quad_blank.clone(),
         bias.join("bias-extension.pvd"),
         drape.join("drape.vtu"),
     ];
@@ -229,6 +261,15 @@ fn every_paraview_file_reads_in_vtk_as_written() {
         );
     }
 
+    // quadrilaterals: 16 x 16 cells of VTK type 9 on the same 17 x 17 nodes, the same arrays
+    assert_cells(
+        "quad-formed-blank.vtu",
+        &read.grids["quad-formed-blank.vtu"],
+        (289, 256),
+        "9",
+        &forming,
+    );
+
     // virtual test: no tools, no contact fields, the fabric's stress under the same name
     assert_eq!(read.times["bias-extension.pvd"].len(), 4);
     let test = sheet_arrays(false, &["stress_fabric"]);
@@ -240,14 +281,15 @@ fn every_paraview_file_reads_in_vtk_as_written() {
         assert!(grid.fields.is_empty(), "{name}: {:?}", grid.fields);
     }
 
-    // drape preview: one point per node of the net, shared by the cells around it (a point
-    // per corner of each cell would give two points per triangle, none shared)
+    // drape preview: a quadrilateral per cell of the net, one point per node of the net shared
+    // by the cells around it (a point per corner of each cell would give four points a cell,
+    // none shared)
     let net = &read.grids["drape.vtu"];
     let shear: BTreeMap<String, String> = [("cell shear_angle_deg".to_string(), "-".to_string())]
         .into_iter()
         .collect();
-    assert_grid("drape.vtu", net, (net.points, net.cells), &shear);
-    assert!(net.cells > 100, "{net:?}");
-    assert!(net.points < net.cells, "{net:?}");
+    assert_cells("drape.vtu", net, (net.points, net.cells), "9", &shear);
+    assert!(net.cells > 50, "{net:?}");
+    assert!(net.points < 2 * net.cells, "{net:?}");
     assert!(2 * net.shared_points > net.points, "{net:?}");
 }

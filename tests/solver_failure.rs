@@ -77,7 +77,7 @@ fn a_run_with_too_large_a_step_stops_with_a_diagnosis() {
             motion: Motion::Velocity(Arc::new(|_, _| Vector3::new(0.0, 10.0, 0.0))),
         },
     ];
-    let elements = mesh.triangles.len();
+    let elements = mesh.cells.len();
     let model = Model::new(
         mesh,
         laminate,

@@ -1,5 +1,5 @@
 //! Gmsh `.msh` files (format 4.1, ASCII and binary) in and out: the sheet's 3-node triangles
-//! and 4-node quadrangles (split in two), physical groups as node and element sets. The rules
+//! and 4-node quadrangles (one cell each), physical groups as node and element sets. The rules
 //! are in docs/meshes.md, "Gmsh (.msh)".
 //!
 //! **Choice:** a parser of our own, not the `mshio` crate (0.4.2, the newest): `mshio` panics
@@ -10,8 +10,7 @@
 //! set aside, and every failure is a [`MeshFileError`] naming the line (ASCII text) or the
 //! byte (binary data).
 
-use super::file::split_quadrilateral;
-use super::{Cell, Mesh, MeshError, MeshFileError, MeshImport};
+use super::{Cell, Mesh, MeshError, MeshFileError, MeshImport, FOLDED};
 use nalgebra::Vector3;
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::fmt::Write as _;
@@ -34,12 +33,12 @@ pub fn read_msh(path: &Path) -> Result<MeshImport, MeshFileError> {
 /// Reads the bytes of a Gmsh MSH 4.1 file (ASCII or binary, either byte order); `file` names it
 /// in errors and notes.
 ///
-/// The sheet is the file's 3-node triangles and 4-node quadrangles (each split along its
-/// shorter diagonal), in file order, with the nodes they use renumbered from 0 in file order
-/// (nodes no triangle or quadrangle uses are left out, with a note). Physical groups become
+/// The sheet is the file's 3-node triangles and 4-node quadrangles, one cell each, in file
+/// order, with the nodes they use renumbered from 0 in file order (nodes no triangle or
+/// quadrangle uses are left out, with a note). Physical groups become
 /// sets: a surface group gives an element set and a node set of its elements' nodes, a curve
 /// or point group a node set of its line or point elements' nodes. Sets are sorted, without
-/// repeats. The orientation of the elements is kept; a surface whose triangles are not
+/// repeats. The orientation of the elements is kept; a surface whose elements are not
 /// consistently oriented gets a note naming the first offending element.
 pub fn parse_msh(bytes: &[u8], file: &str) -> Result<MeshImport, MeshFileError> {
     let raw = RawFile::parse(bytes, file)?;
@@ -58,13 +57,14 @@ pub fn write_msh(path: &Path, mesh: &Mesh) -> Result<(), MeshFileError> {
 /// Writes `mesh` as ASCII Gmsh MSH 4.1 to `out` (`file` names it in errors).
 ///
 /// Nodes get tags 1, 2, ... in index order, written in the shortest form that reads back to
-/// the same `f64`; triangles are 3-node triangles tagged 1, 2, ... in order. Each element set
+/// the same `f64`; cells are 3-node triangles (type 2) and 4-node quadrangles (type 3)
+/// tagged 1, 2, ... in order. Each element set
 /// is a physical surface group of that name; each node set is a physical point group of that
 /// name holding one point element per node, except a node set that is exactly (sorted, no
 /// repeats) the nodes of the element set of the same name, which the reader rebuilds from the
-/// surface group. [`parse_msh`] of the result gives back the same nodes, triangles and sets
+/// surface group. [`parse_msh`] of the result gives back the same nodes, cells and sets
 /// for a mesh whose sets are sorted, without repeats and not empty, whose nodes all belong to
-/// triangles, and whose element sets each have a node set of their name or none (the reader
+/// cells, and whose element sets each have a node set of their name or none (the reader
 /// then adds one).
 pub fn write_msh_to<W: Write>(mut out: W, mesh: &Mesh, file: &str) -> Result<(), MeshFileError> {
     mesh.validate()
@@ -937,7 +937,7 @@ fn elements(
 /// What a physical group of the file holds.
 #[derive(Default)]
 struct Members {
-    /// Triangles (surface groups).
+    /// Cells (surface groups).
     elements: Vec<usize>,
     /// Nodes, renumbered.
     nodes: Vec<usize>,
@@ -965,30 +965,20 @@ fn dimension_word(dimension: i32) -> &'static str {
 impl RawFile {
     fn into_import(mut self, file: &str) -> Result<MeshImport, MeshFileError> {
         let mut notes = std::mem::take(&mut self.notes);
-        // triangles from the surface elements, in file order
-        let mut triangles: Vec<[usize; 3]> = Vec::new();
-        let mut triangle_element: Vec<usize> = Vec::new();
-        let mut quadrangles = 0usize;
-        let raw_positions: Vec<Vector3<f64>> = self.nodes.iter().map(|n| n.x).collect();
+        // cells from the surface elements, in file order
+        let mut cells: Vec<Cell> = Vec::new();
+        let mut cell_element: Vec<usize> = Vec::new();
         for (e, element) in self.elements.iter().enumerate() {
+            let [a, b, c, d] = element.nodes;
             match element.kind {
-                Kind::Triangle => {
-                    let [a, b, c, _] = element.nodes;
-                    triangles.push([a, b, c]);
-                    triangle_element.push(e);
-                }
-                Kind::Quadrangle => {
-                    quadrangles += 1;
-                    for t in split_quadrilateral(&raw_positions, element.nodes) {
-                        triangles.push(t);
-                        triangle_element.push(e);
-                    }
-                }
-                Kind::Line | Kind::Point | Kind::Volume => {}
+                Kind::Triangle => cells.push(Cell::Triangle([a, b, c])),
+                Kind::Quadrangle => cells.push(Cell::Quad([a, b, c, d])),
+                Kind::Line | Kind::Point | Kind::Volume => continue,
             }
+            cell_element.push(e);
         }
         let volumes: usize = self.volumes.values().sum();
-        if triangles.is_empty() {
+        if cells.is_empty() {
             let other = self
                 .elements
                 .iter()
@@ -1002,12 +992,6 @@ impl RawFile {
                 ),
             ));
         }
-        if quadrangles > 0 {
-            notes.push(format!(
-                "{quadrangles} quadrangles split into two triangles each, along their shorter \
-                 diagonal"
-            ));
-        }
         if volumes > 0 {
             let types = self
                 .volumes
@@ -1019,12 +1003,10 @@ impl RawFile {
                 "{volumes} volume elements skipped ({types}): the sheet is the surface elements"
             ));
         }
-        // the nodes the triangles use, renumbered in file order
+        // the nodes the cells use, renumbered in file order
         let mut new_index: Vec<Option<usize>> = vec![None; self.nodes.len()];
-        for t in &triangles {
-            for &n in t {
-                new_index[n] = Some(0);
-            }
+        for &n in cells.iter().flat_map(Cell::nodes) {
+            new_index[n] = Some(0);
         }
         let mut nodes = Vec::new();
         let mut file_node = Vec::new(); // new index -> position in the file
@@ -1052,7 +1034,7 @@ impl RawFile {
             ));
         }
         let renumber = |i: usize| new_index[i].unwrap_or(usize::MAX);
-        let triangles: Vec<[usize; 3]> = triangles.iter().map(|t| t.map(renumber)).collect();
+        let cells: Vec<Cell> = cells.iter().map(|c| c.map(renumber)).collect();
 
         // physical groups
         let entities = self.entities.take();
@@ -1081,13 +1063,13 @@ impl RawFile {
                 .cloned()
                 .unwrap_or_else(|| format!("physical {tag}"))
         };
-        // (dimension, tag) -> element members (triangles) and node members (new indices)
+        // (dimension, tag) -> element members (cells) and node members (new indices)
         let mut members: BTreeMap<(i32, i32), Members> = BTreeMap::new();
-        for (t, &e) in triangle_element.iter().enumerate() {
+        for (t, &e) in cell_element.iter().enumerate() {
             for tag in groups_of(&self.elements[e], &mut unknown_entities) {
                 let entry = members.entry((2, tag)).or_default();
                 entry.elements.push(t);
-                entry.nodes.extend(triangles[t]);
+                entry.nodes.extend_from_slice(cells[t].nodes());
             }
         }
         for element in &self.elements {
@@ -1199,17 +1181,17 @@ impl RawFile {
         }
 
         if let Some(note) = orientation_note(
-            &triangles,
-            |t| self.elements[triangle_element[t]].tag,
+            &cells,
+            |t| self.elements[cell_element[t]].tag,
             |n| self.nodes[file_node[n]].tag,
         ) {
             notes.push(note);
         }
 
-        let rigid = vec![false; triangles.len()];
+        let rigid = vec![false; cells.len()];
         let mesh = Mesh {
             nodes,
-            cells: triangles.into_iter().map(Cell::Triangle).collect(),
+            cells,
             node_sets,
             element_sets,
             warp_directions: None,
@@ -1218,8 +1200,15 @@ impl RawFile {
             MeshError::Degenerate { triangle, area } => MeshFileError::in_file(
                 file,
                 format!(
-                    "element {} is degenerate (a triangle of it has area {area:e} mm^2)",
-                    self.elements[triangle_element[triangle]].tag
+                    "element {} is degenerate (area {area:e} mm^2)",
+                    self.elements[cell_element[triangle]].tag
+                ),
+            ),
+            MeshError::Folded { element } => MeshFileError::in_file(
+                file,
+                format!(
+                    "element {} {FOLDED}",
+                    self.elements[cell_element[element]].tag
                 ),
             ),
             other => MeshFileError::in_file(file, other.to_string()),
@@ -1228,32 +1217,31 @@ impl RawFile {
     }
 }
 
-/// A note when the triangles are not consistently oriented (an edge run twice the same way)
-/// or an edge is shared by more than two triangles; `element` gives the Gmsh tag of a
-/// triangle, `node` the Gmsh tag of a node.
+/// A note when the cells are not consistently oriented (an edge run twice the same way) or an
+/// edge is shared by more than two cells; `element` gives the Gmsh tag of a cell, `node` the
+/// Gmsh tag of a node.
 fn orientation_note(
-    triangles: &[[usize; 3]],
+    cells: &[Cell],
     element: impl Fn(usize) -> u64,
     node: impl Fn(usize) -> u64,
 ) -> Option<String> {
-    // undirected edge -> (first triangle, its direction a < b, uses)
+    // undirected edge -> (first cell, its direction a < b, uses)
     let mut edges: HashMap<(usize, usize), (usize, bool, usize)> = HashMap::new();
     let mut first: Option<String> = None;
     let mut inconsistent = 0usize;
     let mut shared = 0usize;
-    for (t, tri) in triangles.iter().enumerate() {
-        for k in 0..3 {
-            let (a, b) = (tri[k], tri[(k + 1) % 3]);
+    for (t, cell) in cells.iter().enumerate() {
+        for (a, b) in cell.edges() {
             let key = (a.min(b), a.max(b));
             let forward = a < b;
             let entry = edges.entry(key).or_insert((t, forward, 0));
             entry.2 += 1;
             let problem = if entry.2 == 3 {
                 shared += 1;
-                Some("is shared by more than two triangles")
+                Some("is shared by more than two elements")
             } else if entry.2 == 2 && entry.0 != t && entry.1 == forward {
                 inconsistent += 1;
-                Some("runs the same way in both triangles on it")
+                Some("runs the same way in both elements on it")
             } else {
                 None
             };
@@ -1270,8 +1258,8 @@ fn orientation_note(
     }
     first.map(|first| {
         format!(
-            "the triangles are not consistently oriented ({inconsistent} edges run the same \
-             way in both their triangles, {shared} are shared by more than two): first at \
+            "the elements are not consistently oriented ({inconsistent} edges run the same \
+             way in both their elements, {shared} are shared by more than two): first at \
              {first}; Gmsh orients each surface by its geometry, so surfaces meeting at an \
              edge may disagree"
         )
@@ -1452,21 +1440,45 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_orientation_check_names_the_first_triangle_against_its_neighbour() {
+    fn the_orientation_check_names_the_first_element_against_its_neighbour() {
+        let triangles = |list: &[[usize; 3]]| list.iter().map(|&t| Cell::Triangle(t)).collect();
         // a square of two triangles, the second flipped
-        let good = [[0, 1, 2], [0, 2, 3]];
+        let good: Vec<Cell> = triangles(&[[0, 1, 2], [0, 2, 3]]);
         assert_eq!(
             orientation_note(&good, |t| t as u64 + 10, |n| n as u64 + 100),
             None
         );
-        let bad = [[0, 1, 2], [0, 3, 2]];
+        let bad: Vec<Cell> = triangles(&[[0, 1, 2], [0, 3, 2]]);
         let note = orientation_note(&bad, |t| t as u64 + 10, |n| n as u64 + 100).unwrap();
         assert!(note.contains("element 10 and element 11"), "{note}");
         assert!(note.contains("node 102 to node 100"), "{note}");
         // three triangles on one edge
-        let fan = [[0, 1, 2], [1, 0, 3], [1, 0, 4]];
+        let fan: Vec<Cell> = triangles(&[[0, 1, 2], [1, 0, 3], [1, 0, 4]]);
         let note = orientation_note(&fan, |t| t as u64 + 1, |n| n as u64 + 1).unwrap();
         assert!(note.contains("more than two"), "{note}");
+    }
+
+    #[test]
+    fn the_orientation_check_runs_round_every_edge_of_a_quadrangle() {
+        // two quadrangles side by side on the edge 1-4, and a triangle on the edge 4-5
+        let good = [
+            Cell::Quad([0, 1, 4, 3]),
+            Cell::Quad([1, 2, 5, 4]),
+            Cell::Triangle([4, 5, 6]),
+        ];
+        assert_eq!(
+            orientation_note(&good, |t| t as u64 + 1, |n| n as u64),
+            None
+        );
+        // the second quadrangle numbered the other way round
+        let bad = [Cell::Quad([0, 1, 4, 3]), Cell::Quad([1, 4, 5, 2])];
+        let note = orientation_note(&bad, |t| t as u64 + 1, |n| n as u64).unwrap();
+        assert!(note.contains("element 1 and element 2"), "{note}");
+        assert!(note.contains("node 1 to node 4"), "{note}");
+        // a triangle on the quadrangle's edge from 5 to 4 running it the same way
+        let same = [Cell::Quad([1, 2, 5, 4]), Cell::Triangle([5, 4, 6])];
+        let note = orientation_note(&same, |t| t as u64 + 1, |n| n as u64).unwrap();
+        assert!(note.contains("node 5 to node 4"), "{note}");
     }
 
     #[test]

@@ -35,6 +35,11 @@ pub struct Mesh {
     pub warp_directions: Option<Vec<Vector3<f64>>>,
 }
 
+/// What is wrong with a folded quadrilateral, after "element <label>" (the readers name the
+/// file's label).
+pub const FOLDED: &str = "is a quadrilateral that is not convex (a corner turns against the \
+    others, two edges cross or two corners coincide: check its nodes and their order)";
+
 /// What is wrong with a mesh.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum MeshError {
@@ -48,6 +53,9 @@ pub enum MeshError {
     },
     #[error("element {triangle} is degenerate (area {area:e} mm^2)")]
     Degenerate { triangle: usize, area: f64 },
+    /// A quadrilateral that is not convex ([`Cell::is_folded`]).
+    #[error("element {element} {FOLDED}")]
+    Folded { element: usize },
     #[error("node {node} has a non-finite coordinate")]
     NonFinite { node: usize },
     #[error("no set named '{name}' (the mesh has: {available})")]
@@ -88,8 +96,11 @@ impl Mesh {
             }
             let area = self.area(triangle);
             let scale = (self.nodes[t.nodes()[1]] - self.nodes[t.nodes()[0]]).norm_squared();
-            if area.is_nan() || area <= 1e-12 * scale || t.is_folded(&self.nodes) {
+            if area.is_nan() || area <= 1e-12 * scale {
                 return Err(MeshError::Degenerate { triangle, area });
+            }
+            if t.is_folded(&self.nodes) {
+                return Err(MeshError::Folded { element: triangle });
             }
         }
         check_sets("node", &self.node_sets, self.nodes.len())?;
@@ -145,7 +156,7 @@ impl Mesh {
         sum / self.cells.len().max(1) as f64
     }
 
-    /// The triangles of the element set `name`.
+    /// The cells of the element set `name`.
     pub fn element_set(&self, name: &str) -> Result<&[usize], MeshError> {
         self.element_sets
             .get(name)
@@ -156,7 +167,7 @@ impl Mesh {
             })
     }
 
-    /// The nodes of the triangles of the element set `name`, in increasing order.
+    /// The nodes of the cells of the element set `name`, in increasing order.
     pub fn nodes_of_element_set(&self, name: &str) -> Result<Vec<usize>, MeshError> {
         let mut nodes: Vec<usize> = self
             .element_set(name)?
@@ -168,9 +179,9 @@ impl Mesh {
         Ok(nodes)
     }
 
-    /// The mesh of the element set `name` alone: its triangles and their nodes, renumbered in
+    /// The mesh of the element set `name` alone: its cells and their nodes, renumbered in
     /// order, with the sets and warp directions restricted to them. Also returns, for each
-    /// triangle kept, its index in `self`.
+    /// cell kept, its index in `self`.
     pub fn restricted_to(&self, name: &str) -> Result<(Mesh, Vec<usize>), MeshError> {
         let kept = self.element_set(name)?.to_vec();
         let mut new_node = vec![None; self.nodes.len()];

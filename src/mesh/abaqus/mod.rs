@@ -19,7 +19,7 @@ pub use writer::{
 use super::{MeshFileError, MeshImport};
 use std::path::Path;
 
-/// A mesh read from a deck with, per triangle, the shell or membrane thickness (mm) of its
+/// A mesh read from a deck with, per cell (element), the shell or membrane thickness (mm) of its
 /// element's section where the deck gives one.
 #[derive(Clone, Debug, PartialEq)]
 pub struct AbaqusMesh {
@@ -32,7 +32,7 @@ pub fn read_inp(path: &Path) -> Result<MeshImport, MeshFileError> {
     read_inp_with_thickness(path).map(|m| m.import)
 }
 
-/// [`read_inp`], with the thickness of each triangle.
+/// [`read_inp`], with the thickness of each element.
 pub fn read_inp_with_thickness(path: &Path) -> Result<AbaqusMesh, MeshFileError> {
     let text = read_text(path).map_err(|e| {
         MeshFileError::in_file(path.display().to_string(), format!("cannot read: {e}"))

@@ -11,7 +11,8 @@ use crate::mesh::MeshFileError;
 use nalgebra::Vector3;
 use std::collections::HashMap;
 
-/// The element types read: name, corner nodes, rigid (quadrilaterals are split in two).
+/// The element types read: name, corner nodes, rigid (each one cell of the mesh: a triangle
+/// or a quadrilateral).
 pub const ELEMENT_TYPES: [(&str, usize, bool); 9] = [
     ("S3", 3, false),
     ("S3R", 3, false),

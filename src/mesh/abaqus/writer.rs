@@ -96,9 +96,9 @@ pub fn write_inp(
 }
 
 /// Writes `mesh` as an Abaqus input file to `out` (`file` names it in errors): `*HEADING`,
-/// `*NODE`, `*ELEMENT, TYPE=S3`, the node and element sets, and, where there are warp
-/// directions (`elements`, else `mesh.warp_directions`) or thicknesses, per element its own
-/// element set, `*ORIENTATION` (local 1-axis along the warp) and `*SHELL SECTION` (its
+/// `*NODE`, `*ELEMENT, TYPE=S3` (triangles) and `TYPE=S4R` (quadrilaterals), a block per run
+/// of cells of one kind, the node and element sets, and, where there are warp directions
+/// (`elements`, else `mesh.warp_directions`) or thicknesses, per element its own element set, `*ORIENTATION` (local 1-axis along the warp) and `*SHELL SECTION` (its
 /// thickness) with material [`MATERIAL_NAME`]. Every number is written by [`abaqus_number`]
 /// and no data line has more than 16 entries, so that Abaqus and CalculiX read the deck alike.
 pub fn write_inp_to<W: Write>(
@@ -119,7 +119,7 @@ pub fn write_inp_to<W: Write>(
     if let Some(e) = elements {
         if e.warp.len() != count || e.thickness.len() != count {
             return Err(error(format!(
-                "{} warp directions and {} thicknesses for {count} triangles",
+                "{} warp directions and {} thicknesses for {count} elements",
                 e.warp.len(),
                 e.thickness.len()
             )));
@@ -150,8 +150,9 @@ pub fn write_inp_to<W: Write>(
     // writing to a String cannot fail
     let _ = writeln!(
         text,
-        "** Written by thermostamp {}: {count_nodes} nodes, {count} 3-node shell elements (S3).",
-        env!("CARGO_PKG_VERSION")
+        "** Written by thermostamp {}: {count_nodes} nodes, {count} shell elements ({}).",
+        env!("CARGO_PKG_VERSION"),
+        element_kinds(mesh)
     );
     if with_sections {
         let _ = writeln!(
@@ -175,20 +176,14 @@ pub fn write_inp_to<W: Write>(
     for (n, x) in mesh.nodes.iter().enumerate() {
         let _ = writeln!(text, "{}, {}", n + 1, numbers(&[x.x, x.y, x.z]));
     }
-    for (kind, quads) in [("S3", false), ("S4R", true)] {
-        let mut block = mesh
-            .cells
-            .iter()
-            .enumerate()
-            .filter(|(_, c)| c.is_quad() == quads)
-            .peekable();
-        if block.peek().is_some() {
+    // a block per run of cells of one kind, so that the reader (file order) keeps their order
+    for (t, cell) in mesh.cells.iter().enumerate() {
+        if t == 0 || mesh.cells[t - 1].is_quad() != cell.is_quad() {
+            let kind = if cell.is_quad() { "S4R" } else { "S3" };
             let _ = writeln!(text, "*ELEMENT, TYPE={kind}");
         }
-        for (t, cell) in block {
-            let labels: Vec<String> = cell.nodes().iter().map(|n| (n + 1).to_string()).collect();
-            let _ = writeln!(text, "{}, {}", t + 1, labels.join(", "));
-        }
+        let labels: Vec<String> = cell.nodes().iter().map(|n| (n + 1).to_string()).collect();
+        let _ = writeln!(text, "{}, {}", t + 1, labels.join(", "));
     }
     for (name, members) in node_sets.iter().map(|(n, s)| (n, &mesh.node_sets[*s])) {
         let _ = writeln!(text, "*NSET, NSET={name}");
@@ -242,7 +237,7 @@ fn write_sections(
             if !(given.iter().all(|c| c.is_finite()) && b.norm() > 1e-10) {
                 return Err(format!(
                     "element {t}: warp direction {given:?} is zero, not finite or normal to \
-                     the triangle"
+                     the element"
                 ));
             }
             let _ = writeln!(
@@ -256,6 +251,16 @@ fn write_sections(
         let _ = writeln!(text, "{section}\n{h}, 5");
     }
     Ok(())
+}
+
+/// The element types written, for the first comment line.
+fn element_kinds(mesh: &Mesh) -> &'static str {
+    let quads = mesh.cells.iter().filter(|c| c.is_quad()).count();
+    match quads {
+        0 => "3-node S3",
+        q if q == mesh.cells.len() => "4-node S4R",
+        _ => "3-node S3 and 4-node S4R",
+    }
 }
 
 /// 16 labels (indices + 1) a line, as Abaqus reads set data.

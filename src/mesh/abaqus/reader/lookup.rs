@@ -2,7 +2,7 @@
 
 use super::super::lexer::{canonical, unquote, Deck, Loc};
 use super::{parse_label, parse_number, Member, Model, SetKind};
-use crate::mesh::MeshFileError;
+use crate::mesh::{Cell, MeshFileError};
 use std::collections::{HashMap, HashSet};
 
 type Result<T> = std::result::Result<T, MeshFileError>;
@@ -13,7 +13,7 @@ impl Model {
     pub(super) fn resolve_sets(
         &self,
         deck: &Deck,
-        connectivity: &[Vec<usize>],
+        cells: &[Cell],
     ) -> Result<(HashMap<String, IndexSet>, HashMap<String, IndexSet>)> {
         let mut node_sets: HashMap<String, IndexSet> = HashMap::new();
         let mut element_sets: HashMap<String, IndexSet> = HashMap::new();
@@ -89,7 +89,7 @@ impl Model {
                             )
                         })?;
                         for &e in &other.order {
-                            for &n in &connectivity[e] {
+                            for &n in cells[e].nodes() {
                                 set.insert(n);
                             }
                         }

@@ -1,36 +1,18 @@
 //! The deck read, what it means: labels resolved to indices, sets in the order of their
-//! definitions, each element's section with its orientation and thickness, quadrilaterals
-//! split, nodes of no element dropped, and the mesh validated.
+//! definitions, each element's section with its orientation and thickness, one cell per
+//! element (triangles and quadrilaterals as they are), nodes of no element dropped, and the mesh
+//! validated.
 
 use super::super::lexer::{Deck, Loc};
 use super::super::writer::{is_section_set, SECTION_SET_PREFIX};
 use super::super::AbaqusMesh;
 use super::lookup::{IndexSet, Resolved, Use};
 use super::{supported_types, Axes, Model, Thickness, ELEMENT_TYPES};
-use crate::mesh::file::split_quadrilateral;
-use crate::mesh::{Cell, Mesh, MeshError, MeshFileError, MeshImport};
+use crate::mesh::{Cell, Mesh, MeshError, MeshFileError, MeshImport, FOLDED};
 use nalgebra::Vector3;
 use std::collections::{BTreeMap, HashMap, HashSet};
-use std::ops::Range;
 
 type Result<T> = std::result::Result<T, MeshFileError>;
-
-/// The elements as triangles.
-struct Triangulation {
-    triangles: Vec<[usize; 3]>,
-    /// The element of each triangle.
-    element: Vec<usize>,
-    /// The triangles of element `e`: `first[e]..first[e + 1]`.
-    first: Vec<usize>,
-    /// Quadrilaterals split, by type.
-    quads: BTreeMap<&'static str, usize>,
-}
-
-impl Triangulation {
-    fn of(&self, e: usize) -> Range<usize> {
-        self.first[e]..self.first[e + 1]
-    }
-}
 
 /// Per element: the warp reference (local 1-axis) and thickness of its section.
 struct Properties {
@@ -53,14 +35,14 @@ fn some_labels(labels: impl Iterator<Item = u64>, total: usize) -> String {
 impl Model {
     /// Resolves labels, sets, sections, orientations and thicknesses and builds the mesh.
     pub(super) fn finish(mut self, deck: &Deck) -> Result<AbaqusMesh> {
-        let connectivity = self.connectivity(deck)?;
-        let (node_sets, element_sets) = self.resolve_sets(deck, &connectivity)?;
+        // cell `e` is element `e`
+        let cells = self.cells(deck)?;
+        let (node_sets, element_sets) = self.resolve_sets(deck, &cells)?;
         let properties = self.properties(deck, &element_sets)?;
-        let split = self.triangulate(&connectivity);
 
         // nodes used by no element are dropped
         let mut used = vec![false; self.nodes.len()];
-        for &n in split.triangles.iter().flatten() {
+        for &n in cells.iter().flat_map(Cell::nodes) {
             used[n] = true;
         }
         let mut new_index = vec![usize::MAX; self.nodes.len()];
@@ -121,8 +103,7 @@ impl Model {
                 section_sets += 1;
                 continue;
             }
-            let members: Vec<usize> = set.order.iter().flat_map(|&e| split.of(e)).collect();
-            mesh_element_sets.insert(set.name, members);
+            mesh_element_sets.insert(set.name, set.order);
         }
         if !internal.is_empty() {
             internal.sort();
@@ -138,27 +119,19 @@ impl Model {
             ));
         }
 
-        let rigid: Vec<bool> = split.element.iter().map(|&e| self.rigid(e)).collect();
-        let warp_directions = self.warp_directions(&properties, &split);
-        let thickness = split
-            .element
-            .iter()
-            .map(|&e| properties.thickness[e])
-            .collect();
-        let notes = self.notes(deck, &split);
+        let rigid: Vec<bool> = (0..cells.len()).map(|e| self.rigid(e)).collect();
+        let warp_directions = self.warp_directions(&properties);
+        let thickness = properties.thickness;
+        let notes = self.notes(deck);
         let mesh = Mesh {
             nodes: kept.iter().map(|&n| self.nodes[n].position).collect(),
-            cells: split
-                .triangles
-                .iter()
-                .map(|t| Cell::Triangle(t.map(|n| new_index[n])))
-                .collect(),
+            cells: cells.iter().map(|c| c.map(|n| new_index[n])).collect(),
             node_sets: mesh_node_sets,
             element_sets: mesh_element_sets,
             warp_directions,
         };
         if let Err(e) = mesh.validate() {
-            return Err(self.validation_error(deck, e, &split, &kept));
+            return Err(self.validation_error(deck, e, &kept));
         }
         Ok(AbaqusMesh {
             import: MeshImport { mesh, rigid, notes },
@@ -170,12 +143,14 @@ impl Model {
         ELEMENT_TYPES[self.elements[e].kind].2
     }
 
-    /// Each element's nodes as node indices.
-    fn connectivity(&self, deck: &Deck) -> Result<Vec<Vec<usize>>> {
+    /// One cell per element, on node indices, its nodes in the element's order (which gives
+    /// the normal).
+    fn cells(&self, deck: &Deck) -> Result<Vec<Cell>> {
         self.elements
             .iter()
             .map(|e| {
-                e.nodes
+                let nodes = e
+                    .nodes
                     .iter()
                     .map(|label| {
                         self.node_index.get(label).copied().ok_or_else(|| {
@@ -188,40 +163,17 @@ impl Model {
                             )
                         })
                     })
-                    .collect()
+                    .collect::<Result<Vec<usize>>>()?;
+                match *nodes.as_slice() {
+                    [a, b, c] => Ok(Cell::Triangle([a, b, c])),
+                    [a, b, c, d] => Ok(Cell::Quad([a, b, c, d])),
+                    _ => Err(deck.error(
+                        e.loc,
+                        format!("element {} has {} nodes, not 3 or 4", e.label, nodes.len()),
+                    )),
+                }
             })
             .collect()
-    }
-
-    /// Triangles of the elements, quadrilaterals split along their shorter diagonals.
-    fn triangulate(&self, connectivity: &[Vec<usize>]) -> Triangulation {
-        let positions: Vec<Vector3<f64>> = self.nodes.iter().map(|n| n.position).collect();
-        let mut split = Triangulation {
-            triangles: Vec::with_capacity(2 * connectivity.len()),
-            element: Vec::with_capacity(2 * connectivity.len()),
-            first: Vec::with_capacity(connectivity.len() + 1),
-            quads: BTreeMap::new(),
-        };
-        for (e, nodes) in connectivity.iter().enumerate() {
-            split.first.push(split.triangles.len());
-            let triangles = match *nodes.as_slice() {
-                [a, b, c] => vec![[a, b, c]],
-                [a, b, c, d] => {
-                    *split
-                        .quads
-                        .entry(ELEMENT_TYPES[self.elements[e].kind].0)
-                        .or_default() += 1;
-                    split_quadrilateral(&positions, [a, b, c, d]).to_vec()
-                }
-                _ => Vec::new(),
-            };
-            for t in triangles {
-                split.triangles.push(t);
-                split.element.push(e);
-            }
-        }
-        split.first.push(split.triangles.len());
-        split
     }
 
     /// Each element's section, then its orientation's local 1-axis (after the additional
@@ -322,13 +274,9 @@ impl Model {
         Ok(properties)
     }
 
-    /// Per triangle, its element's local 1-axis: `None` where no element has an orientation,
-    /// the global x axis (with a note) for the elements without one where others have one.
-    fn warp_directions(
-        &mut self,
-        properties: &Properties,
-        split: &Triangulation,
-    ) -> Option<Vec<Vector3<f64>>> {
+    /// Per element, its local 1-axis: `None` where no element has an orientation, the global x
+    /// axis (with a note) for the elements without one where others have one.
+    fn warp_directions(&mut self, properties: &Properties) -> Option<Vec<Vector3<f64>>> {
         let warp = &properties.warp;
         if warp.iter().all(Option::is_none) {
             return None;
@@ -346,36 +294,16 @@ impl Model {
                 some_labels(bare.iter().map(|&e| self.elements[e].label), bare.len())
             ));
         }
-        Some(
-            split
-                .element
-                .iter()
-                .map(|&e| warp[e].unwrap_or_else(Vector3::x))
-                .collect(),
-        )
+        Some(warp.iter().map(|w| w.unwrap_or_else(Vector3::x)).collect())
     }
 
-    /// The notes: what was split, flagged, read as structure, ignored.
-    fn notes(&mut self, deck: &Deck, split: &Triangulation) -> Vec<String> {
+    /// The notes: what was flagged, read as structure, ignored.
+    fn notes(&mut self, deck: &Deck) -> Vec<String> {
         let mut notes = Vec::new();
-        if !split.quads.is_empty() {
-            let quads: usize = split.quads.values().sum();
-            notes.push(format!(
-                "{} ({}) split into {} triangles along their shorter diagonals",
-                count(quads, "quadrilateral", "quadrilaterals"),
-                split
-                    .quads
-                    .iter()
-                    .map(|(k, n)| format!("{k}: {n}"))
-                    .collect::<Vec<_>>()
-                    .join(", "),
-                2 * quads
-            ));
-        }
         let rigid = (0..self.elements.len()).filter(|&e| self.rigid(e)).count();
         if rigid > 0 {
             notes.push(format!(
-                "{} (R3D3/R3D4): their triangles are flagged rigid",
+                "{} (R3D3/R3D4): flagged rigid",
                 count(rigid, "rigid element", "rigid elements")
             ));
         }
@@ -396,15 +324,9 @@ impl Model {
     }
 
     /// What [`Mesh::validate`] found, at the element or node concerned.
-    fn validation_error(
-        &self,
-        deck: &Deck,
-        error: MeshError,
-        split: &Triangulation,
-        kept: &[usize],
-    ) -> MeshFileError {
+    fn validation_error(&self, deck: &Deck, error: MeshError, kept: &[usize]) -> MeshFileError {
         let file = deck.files.first().cloned().unwrap_or_default();
-        let element = |t: usize| &self.elements[split.element[t]];
+        let element = |e: usize| &self.elements[e];
         match error {
             MeshError::Empty => MeshFileError::in_file(
                 file,
@@ -413,9 +335,13 @@ impl Model {
             MeshError::Degenerate { triangle, area } => deck.error(
                 element(triangle).loc,
                 format!(
-                    "element {} is degenerate (a triangle of area {area:e} mm^2)",
+                    "element {} is degenerate (area {area:e} mm^2)",
                     element(triangle).label
                 ),
+            ),
+            MeshError::Folded { element: e } => deck.error(
+                element(e).loc,
+                format!("element {} {}", element(e).label, FOLDED),
             ),
             MeshError::NonFinite { node } => match kept.get(node).map(|&n| &self.nodes[n]) {
                 Some(n) => deck.error(
