@@ -593,7 +593,7 @@ fn scenario_cases(f: &Fixtures) -> Vec<Case> {
         ),
         (
             "pattern unknown",
-            "pattern = \"right\"",
+            "pattern = \"quad\"",
             "pattern = \"diagonal\"",
             "blank.pattern",
         ),

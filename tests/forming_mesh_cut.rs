@@ -1,12 +1,12 @@
 //! The shear field of a formed part does not depend on how the mesh is cut (docs/model.md §4,
 //! element technology): on quadrilaterals the hemisphere's four shear lobes are alike, the
 //! field is smooth at the element scale where the pin-jointed net is, a ±45° ply gives the 0/90
-//! ply's field turned by 45°, and the largest shear approaches the net's as the mesh is refined.
+//! ply's field turned by 45°, and the largest shear converges as the mesh is refined.
 //!
 //! The fast checks run on a shortened hemisphere (the test fabric of stiff yarns and soft
 //! shear, 15 mm of stroke at 50 mm/s); the ignored ones on the shipped example at 4 and 2 mm
 //! cells (`cargo test --release --test forming_mesh_cut -- --ignored --nocapture`, about
-//! 40 minutes on 2 cores), their figures in docs/model.md §4.
+//! 35 minutes on 2 cores), their figures in docs/model.md §4.
 
 mod common;
 
@@ -152,53 +152,51 @@ fn rotated_rms(part: &Formed, turned: &Formed, radius: f64) -> f64 {
 
 /// The shortened hemisphere on 8 mm quadrilaterals, 0/90 and ±45°: the four quadrant maxima
 /// within 1° of each other, neighbours within 2° wherever the net varies by less than 1°, and
-/// the ±45° ply's field the 0/90 one's turned by 45° within 1.5° RMS over the cap.
+/// the ±45° ply's field the 0/90 one's turned by 45° within 1.5° RMS over the cap (measured
+/// 0.01°, 0.03° over 16 pairs and 1.06°).
 #[test]
 fn quadrilaterals_shear_alike_in_every_lobe_smoothly_and_at_any_ply_angle() {
-    let straight = scenario(true, &mesh(8.0, "quad", 0.0));
-    let part = form(&straight);
-    let maxima = quadrant_maxima(&part);
-    eprintln!("quadrant maxima {maxima:?}");
-    assert!(spread(&maxima) < 1.0, "quadrant maxima {maxima:?}");
-    let net = net_at_elements(&straight, &part, 8.0);
-    let (pairs, worst) = oscillation(&part, &net);
-    eprintln!("{pairs} neighbour pairs where the net is smooth: {worst:.2}° apart at most");
-    assert!(pairs > 10 && worst < 2.0, "{pairs} pairs, {worst}°");
-    let turned = form(&scenario(true, &mesh(8.0, "quad", 45.0)));
-    let maxima_turned = quadrant_maxima(&turned);
-    assert!(spread(&maxima_turned) < 1.0, "±45°: {maxima_turned:?}");
-    let rms = rotated_rms(&part, &turned, 35.0);
-    eprintln!("±45° against 0/90 turned: RMS {rms:.2}°");
-    assert!(rms < 1.5, "RMS {rms}°");
+    check_free_of_the_cut(true, 8.0, 10);
 }
 
 /// The same checks on the shipped example at 4 mm cells (1,600 quadrilaterals, 30 mm of
-/// stroke).
+/// stroke; its runs of docs/model.md §4 measured 0.04°, 0.95° and 0.66°).
 #[test]
-#[ignore = "about 15 minutes on 2 cores; figures in docs/model.md §4"]
+#[ignore = "about 10 minutes on 2 cores; figures in docs/model.md §4"]
 fn example_on_4_mm_quadrilaterals_is_free_of_the_cut() {
-    let straight = scenario(false, &mesh(4.0, "quad", 0.0));
+    check_free_of_the_cut(false, 4.0, 100);
+}
+
+fn check_free_of_the_cut(short: bool, size: f64, min_pairs: usize) {
+    let straight = scenario(short, &mesh(size, "quad", 0.0));
     let part = form(&straight);
     let maxima = quadrant_maxima(&part);
-    eprintln!("4 mm: quadrant maxima {maxima:?}");
+    eprintln!("{size} mm: quadrant maxima {maxima:?}");
     assert!(spread(&maxima) < 1.0, "quadrant maxima {maxima:?}");
-    let net = net_at_elements(&straight, &part, 4.0);
+    let net = net_at_elements(&straight, &part, size);
     let (pairs, worst) = oscillation(&part, &net);
-    eprintln!("4 mm: {pairs} neighbour pairs where the net is smooth: {worst:.2}° apart at most");
-    assert!(worst < 2.0, "{pairs} pairs, {worst}°");
-    let turned = form(&scenario(false, &mesh(4.0, "quad", 45.0)));
+    eprintln!(
+        "{size} mm: {pairs} neighbour pairs where the net is smooth, {worst:.2}° apart at most"
+    );
+    assert!(pairs > min_pairs && worst < 2.0, "{pairs} pairs, {worst}°");
+    let turned = form(&scenario(short, &mesh(size, "quad", 45.0)));
+    let maxima_turned = quadrant_maxima(&turned);
+    assert!(spread(&maxima_turned) < 1.0, "±45°: {maxima_turned:?}");
     let rms = rotated_rms(&part, &turned, 35.0);
-    eprintln!("4 mm: ±45° against 0/90 turned: RMS {rms:.2}°");
+    eprintln!("{size} mm: ±45° against 0/90 turned: RMS {rms:.2}°");
     assert!(rms < 1.5, "RMS {rms}°");
 }
 
-/// Mesh convergence of the shipped example on quadrilaterals: the largest shear approaches the
-/// pin-jointed net's on the same cap as the cells go 8, 4, 2 mm, and the quadrant maxima stay
-/// within 1° of each other at every size.
+/// Mesh convergence of the shipped example on quadrilaterals, 8, 4 and 2 mm cells: the quadrant
+/// maxima within 1° of each other at every size, and the largest shear on the cap converging
+/// (the change from 4 to 2 mm below that from 8 to 4; measured 26.0, 28.3, 29.4°). The
+/// pin-jointed net on the same cap does not converge (27.65, 31.65, 35.8°: its largest cell
+/// is at its edge on the punch's flank), so the gap to it is printed, not asserted
+/// (docs/model.md §4).
 #[test]
-#[ignore = "about 30 minutes on 2 cores; figures in docs/model.md §4"]
-fn largest_shear_converges_to_the_net_under_refinement() {
-    let mut gaps = Vec::new();
+#[ignore = "about 25 minutes on 2 cores; figures in docs/model.md §4"]
+fn largest_shear_converges_under_refinement() {
+    let mut largest = Vec::new();
     for size in [8.0, 4.0, 2.0] {
         let s = scenario(false, &mesh(size, "quad", 0.0));
         let part = form(&s);
@@ -206,7 +204,7 @@ fn largest_shear_converges_to_the_net_under_refinement() {
         let net = drape_preview(&s, &Generators::of(&s)).unwrap();
         let pin_jointed = net.max_shear().unwrap().shear_deg.abs();
         let on_cap = net_at_elements(&s, &part, size);
-        let largest = part
+        let cap = part
             .shear
             .iter()
             .zip(&on_cap)
@@ -214,11 +212,31 @@ fn largest_shear_converges_to_the_net_under_refinement() {
             .map(|(&g, _)| g)
             .fold(0.0, f64::max);
         eprintln!(
-            "{size} mm: quadrant maxima {maxima:?}, largest on the cap {largest:.2}°, net \
+            "{size} mm: quadrant maxima {maxima:?}, largest on the cap {cap:.2}°, net \
              {pin_jointed:.2}°"
         );
         assert!(spread(&maxima) < 1.0, "{size} mm: {maxima:?}");
-        gaps.push((largest - pin_jointed).abs());
+        largest.push(cap);
     }
-    assert!(gaps[2] <= gaps[0], "gap to the net {gaps:?}");
+    let (first, second) = (largest[1] - largest[0], largest[2] - largest[1]);
+    assert!(second.abs() < first.abs(), "largest on the cap {largest:?}");
+}
+
+/// A blank cut with alternating or crossed diagonals is formed with a note that its bending
+/// is soft; quadrilaterals and single diagonals are not.
+#[test]
+fn soft_bending_patterns_are_noted() {
+    for (pattern, noted) in [
+        ("quad", false),
+        ("right", false),
+        ("alternating", true),
+        ("crossed", true),
+    ] {
+        let forming = FormingModel::new(&scenario(false, &mesh(8.0, pattern, 0.0))).unwrap();
+        let note = forming
+            .notes
+            .iter()
+            .any(|n| n.contains("bending of these triangles is soft"));
+        assert_eq!(note, noted, "{pattern}: {:?}", forming.notes);
+    }
 }

@@ -46,14 +46,15 @@ pub struct MembraneElement {
 /// - shear: `1/2 k_s |q_t|^2`, `q_t` its part in the current tangent plane,
 ///   `k_s = (2/3) G t0 A0 sum_a |grad0 N_a|^2` with `G t0` the laminate's in-plane shear
 ///   stiffness at rest: what a fully integrated bilinear element gives the mode through shear;
-/// - yarns: `1/2 sum_y E t0 Y_y (y . q)^2` over warp and weft, `y` the current yarn direction.
-///   The mode stretches a yarn by `(y . q)(eta (a . grad xi) + xi (a . grad eta))`, a linear
-///   field; only its variation across the yarn (a neighbouring parallel yarn stretched more)
-///   is held, `Y_y = c_y^2 I_y`, `c_y = (a . grad xi)(n . grad eta) + (a . grad eta)(n . grad xi)`,
-///   `I_y = int ((X - Xc) . n)^2 dA`, `a` the reference yarn, `n` normal to it in the plane.
-///   With the yarns along the edges this is the fully integrated element's yarn energy (the
-///   edges are yarns, as in the pin-jointed net); with yarns at 45° to the edges `c_y = 0`: the
-///   variation along a yarn, which would lock the element, is not held.
+/// - yarns, where they run along the cell's edges (within [`ALIGNED`]):
+///   `1/2 sum_y E t0 Y_y (y . q)^2` over warp and weft, `y` the current yarn direction. The
+///   mode stretches a yarn by `(y . q)(eta (a . grad xi) + xi (a . grad eta))`, which varies
+///   across the yarn (a neighbouring parallel yarn, here the opposite edge, stretched more):
+///   `Y_y = c_y^2 I_y`, `c_y = (a . grad xi)(n . grad eta) + (a . grad eta)(n . grad xi)`,
+///   `I_y = int ((X - Xc) . n)^2 dA`, `a` the reference yarn, `n` normal to it in the plane:
+///   the fully integrated element's yarn energy (the edges are yarns, as in the pin-jointed
+///   net). Yarns that cross the edges get none: there the same constraint is not shared with
+///   the neighbours and locks the element.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Hourglass {
     pub gamma: [f64; 4],
@@ -70,6 +71,13 @@ pub struct HourglassModuli {
     pub shear: f64,
     pub yarn: f64,
 }
+
+/// Sine of the largest angle between a yarn and the cell's edge directions for the yarn to be
+/// taken as running along the edges (0.06°) **(choice)**: then the edges are yarns, as in the
+/// pin-jointed net, and the hourglass's variation across the yarn is real; across the edges
+/// any share of it locks the element (measured: with `Y` scaled by `cos^2(2 theta)`, a 30° ply
+/// on the hemisphere sheared 20.4° against 27.9° for 0/90 and 26.9° for 45°).
+const ALIGNED: f64 = 1e-3;
 
 /// Why an element cannot be built.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -231,9 +239,9 @@ impl MembraneElement {
             if let Some(f) = forces.as_deref_mut() {
                 // d(y . q)/dx_a = gamma_a y + (grad0 N_a . a0) (I - y y^T) q / |F a0|
                 let across = (q - y * y_q) / length;
-                for a in 0..4 {
-                    let lever = self.shape_gradients[a].dot(&fibre.xy());
-                    f[a] += (y * hourglass.gamma[a] + across * lever) * (k_y * y_q);
+                let terms = self.shape_gradients.iter().zip(hourglass.gamma);
+                for (f_a, (g, gamma)) in f.iter_mut().zip(terms) {
+                    *f_a += (y * gamma + across * g.dot(&fibre.xy())) * (k_y * y_q);
                 }
             }
         }
@@ -303,6 +311,12 @@ fn quad_geometry(p: &[Vector2<f64>], fibres: &FibreDirections) -> Geometry {
         j_inv_t.column(1).into_owned(),
     );
     let yarn_factor = |a: Vector2<f64>| {
+        let along_an_edge = [j.column(0), j.column(1)]
+            .iter()
+            .any(|edge| cross(&a, &edge.normalize()).abs() < ALIGNED);
+        if !along_an_edge {
+            return 0.0;
+        }
         let n = Vector2::new(-a.y, a.x);
         let c = a.dot(&grad_xi) * n.dot(&grad_eta) + a.dot(&grad_eta) * n.dot(&grad_xi);
         // int ((X - Xc) . n)^2 dA of the parallelogram X - Xc = J0 (xi, eta)
@@ -520,7 +534,7 @@ mod tests {
     }
 
     #[test]
-    fn yarns_along_the_edges_hold_the_hourglass_as_full_integration_and_yarns_at_45_degrees_not() {
+    fn yarns_along_the_edges_hold_the_hourglass_as_full_integration_and_crossing_yarns_not() {
         let square = [
             Vector3::new(0.0, 0.0, 0.0),
             Vector3::new(2.0, 0.0, 0.0),
@@ -553,16 +567,13 @@ mod tests {
             diagonal.yarn_factors.iter().all(|y| y.abs() < 1e-12),
             "{diagonal:?}"
         );
-        // in between, cos^2 (2 theta) of the aligned one
+        // nor do yarns at any other angle to the edges
         let thirty = quad(Vector3::new(
             30f64.to_radians().cos(),
             30f64.to_radians().sin(),
             0.0,
         ));
-        assert!(
-            (thirty.yarn_factors[0] - 4.0 / 3.0 * 0.25).abs() < 1e-12,
-            "{thirty:?}"
-        );
+        assert!(thirty.yarn_factors == [0.0, 0.0], "{thirty:?}");
         // and the energy is E t Y (y . q)^2 / 2: the pattern h moved along x by s
         let s = 0.01;
         let h = [1.0, -1.0, 1.0, -1.0];

@@ -15,7 +15,7 @@ use crate::contact::{
 use crate::experiment::sheet_test::Crosshead;
 use crate::material::MaterialCard;
 use crate::mesh::orientation::{describe_poor_projections, poor_projections, reference_warp};
-use crate::mesh::{read_mesh_file, rectangle, Mesh};
+use crate::mesh::{read_mesh_file, rectangle, DiagonalPattern, Mesh};
 use crate::solver::estimate::RunEstimate;
 use crate::solver::{Constraint, Model, Motion, SolverSettings};
 use nalgebra::Vector3;
@@ -106,6 +106,7 @@ impl FormingModel {
         .map_err(|e| e.to_string())?;
         if let Some(rigidity) = card.bending {
             model = model.with_bending(rigidity).map_err(|e| e.to_string())?;
+            notes.extend(soft_bending_note(s));
         }
         let simulated = p.punch_speed * p.time_scaling;
         let punch = Crosshead {
@@ -179,6 +180,26 @@ impl FormingModel {
         let beyond = self.distance_from_ridge(x) - self.flange_radius;
         (beyond.max(0.0) / self.element_size).floor() as usize
     }
+}
+
+/// A note for a rectangle cut with alternating or crossed diagonals: their valence-4 nodes
+/// let the bending patches relax into a wavy state (a pinned strip buckles at 0.90 and 0.56
+/// of the Euler load, `tests/bending.rs`), so wrinkles come too easily.
+fn soft_bending_note(s: &Scenario) -> Option<String> {
+    let BlankShape::Rectangle { pattern, .. } = s.blank.shape else {
+        return None;
+    };
+    let euler = match pattern {
+        DiagonalPattern::Alternating => 0.90,
+        DiagonalPattern::Crossed => 0.56,
+        DiagonalPattern::Quad | DiagonalPattern::Right => return None,
+    };
+    Some(format!(
+        "blank.pattern = \"{}\": the bending of these triangles is soft (a pinned strip buckles \
+         at {euler} of the Euler load), so the part wrinkles too easily; \"quad\" (the default) \
+         or \"right\" bend within 5 % of it (docs/forming.md, \"Bending\")",
+        format!("{pattern:?}").to_lowercase()
+    ))
 }
 
 /// The blank's mesh: the rectangle, or the file's (restricted to `element_set` if named), with

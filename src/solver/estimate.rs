@@ -17,9 +17,10 @@ pub const MAX_STEPS: f64 = 1e9;
 /// cannot follow (its waves cross an element in a step) and the result is an impact.
 pub const MIN_TRAVEL_STEPS: f64 = 500.0;
 
-/// Element-steps per second and thread for the wall-time guess: the measured rate of the
-/// forming examples (bending, contact) is 3e5 to 1e6 per thread, of the bare sheet tests up to
-/// 2e6 (docs/performance.md); the guess is good to a factor of about 3.
+/// Element-steps per second and thread for the wall-time guess (a quadrilateral counts as two
+/// elements): the measured rate of the forming examples (bending, contact) is 3e5 to 1e6 per
+/// thread, of the bare sheet tests up to 2e6 (docs/performance.md); the guess is good to a
+/// factor of about 3.
 pub const ELEMENT_STEPS_PER_THREAD_SECOND: f64 = 5e5;
 
 /// Mass scaling that adds more than this many times the blank's own mass makes every force an
@@ -30,6 +31,9 @@ pub const MAX_ADDED_MASS_RATIO: f64 = 1e4;
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct RunSize {
     pub elements: usize,
+    /// Of the elements, the quadrilaterals: each costs about two triangles a step (four
+    /// corners, the hourglass, a bending patch of four triangles' patches).
+    pub quads: usize,
     pub nodes: usize,
     /// Layers of the laminate (per-element state variables).
     pub layers: usize,
@@ -175,6 +179,7 @@ pub fn estimate(model: &Model, settings: &SolverSettings) -> Result<RunEstimate,
     let (time_step, added_mass_ratio) = rest_step(model, settings)?;
     let size = RunSize {
         elements: model.elements.len(),
+        quads: model.elements.iter().filter(|e| e.cell.is_quad()).count(),
         nodes: model.mesh.nodes.len(),
         layers: model.laminate.initial_state().thickness_stretch.len(),
         bending: model.bending.is_some(),
@@ -188,7 +193,7 @@ pub fn estimate(model: &Model, settings: &SolverSettings) -> Result<RunEstimate,
         time_step,
         steps,
         memory: resident_memory().unwrap_or(0.0) + run_memory(&size),
-        wall_seconds: steps * size.elements as f64 / rate,
+        wall_seconds: steps * (size.elements + size.quads) as f64 / rate,
         added_mass_ratio,
     })
 }

@@ -4,7 +4,7 @@
 //! `v_{n+1/2} = v_{n-1/2} + (dt_{n-1/2} + dt_{n+1/2})/2 a_n`, `x_{n+1} = x_n + dt_{n+1/2} v_{n+1/2}`.
 //! The viscous matrix sees the rate from `v_{n-1/2}`, half a step behind, as usual in explicit
 //! codes. Constrained nodes get their prescribed velocity at `t_{n+1/2}`; their reaction is
-//! `R = f_int + m a`. The step is `safety x min_e(h_e / c_e)` with `h_e` the smallest altitude
+//! `R = f_int + m a`. The step is `safety x min_e(h_e / c_e)` with `h_e` the element length (`MembraneElement::altitude`)
 //! and `c_e = sqrt(E_e / rho_e)` from the laminate's current wave modulus, re-evaluated every step,
 //! times `sqrt(1 + xi^2) - xi` for the damping `xi` of the element's highest mode by the yarn
 //! damping and the matrix viscosity (the critical step of a damped oscillator).
