@@ -303,7 +303,7 @@ fn stable_step_is_below_the_critical_step_of_the_element() {
                         .unwrap()
                         * t,
                 };
-                e.hourglass_forces(x, &moduli, &mut forces);
+                e.hourglass_forces(x, &f, &moduli, &mut forces);
                 forces
             };
             // in-plane stiffness by central differences at rest

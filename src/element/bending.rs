@@ -124,7 +124,7 @@ impl Bending {
     ) -> Result<Self, BendingError> {
         rigidity.validate()?;
         check_manifold(mesh)?;
-        let around = triangles_around_nodes(mesh);
+        let around = elements_around_nodes(mesh);
         let patches: Vec<Option<BendingPatch>> = elements
             .par_iter()
             .enumerate()
@@ -230,7 +230,7 @@ impl BendingPatch {
     /// strip relaxes at 0.16 of the Euler load.
     fn quadrilateral(mesh: &Mesh, e: &MembraneElement, ring: Vec<usize>) -> Option<Self> {
         let q = e.nodes();
-        let mut nodes: Vec<usize> = q.iter().copied().chain(ring.iter().copied()).collect();
+        let nodes: Vec<usize> = q.iter().copied().chain(ring.iter().copied()).collect();
         let mut operator = vec![Vector3::zeros(); nodes.len()];
         for k in 0..4 {
             let corners = [q[k], q[(k + 1) % 4], q[(k + 2) % 4]];
@@ -241,15 +241,13 @@ impl BendingPatch {
             }
         }
         // ring nodes no sub-triangle chose carry nothing
-        let used: Vec<bool> = operator
-            .iter()
+        let (nodes, operator): (Vec<usize>, Vec<Vector3<f64>>) = nodes
+            .into_iter()
+            .zip(operator)
             .enumerate()
-            .map(|(i, g)| i < 4 || g.norm() > 0.0)
-            .collect();
-        let mut keep = used.iter();
-        nodes.retain(|_| *keep.next().unwrap_or(&false));
-        let mut keep = used.iter();
-        operator.retain(|_| *keep.next().unwrap_or(&false));
+            .filter(|(i, (_, g))| *i < 4 || g.norm() > 0.0)
+            .map(|(_, kept)| kept)
+            .unzip();
         Some(Self::at_rest(mesh, e, nodes, operator))
     }
 
@@ -441,7 +439,7 @@ fn check_manifold(mesh: &Mesh) -> Result<(), BendingError> {
 }
 
 /// The elements around each node.
-fn triangles_around_nodes(mesh: &Mesh) -> Vec<Vec<usize>> {
+fn elements_around_nodes(mesh: &Mesh) -> Vec<Vec<usize>> {
     let mut around = vec![Vec::new(); mesh.nodes.len()];
     for (t, cell) in mesh.cells.iter().enumerate() {
         for &n in cell.nodes() {

@@ -165,17 +165,19 @@ impl MembraneElement {
         self.shape_gradients.map(|g| fn_area * g)
     }
 
-    /// The hourglass forces `dW/dx_a` of a quadrilateral at the positions `x`, added to
+    /// The hourglass forces `dW/dx_a` of a quadrilateral at the positions `x` (`f` its centre
+    /// gradient there, as the element loop has it), added to
     /// `forces`, the turn of the tangent plane and of the yarns with `x` included (the forces
     /// are exactly those of the energy); returns the mode's energy. Nothing for a triangle.
     pub fn hourglass_forces(
         &self,
         x: &[Vector3<f64>],
+        f: &Matrix3x2<f64>,
         moduli: &HourglassModuli,
         forces: &mut [Vector3<f64>; 4],
     ) -> f64 {
         match &self.hourglass {
-            Some(hourglass) => self.hourglass_mode(hourglass, x, moduli, Some(forces)),
+            Some(hourglass) => self.hourglass_mode(hourglass, x, f, moduli, Some(forces)),
             None => 0.0,
         }
     }
@@ -183,7 +185,7 @@ impl MembraneElement {
     /// Energy of the hourglass mode at `x` (N·mm); zero for a triangle.
     pub fn hourglass_energy(&self, x: &[Vector3<f64>], moduli: &HourglassModuli) -> f64 {
         self.hourglass.as_ref().map_or(0.0, |hourglass| {
-            self.hourglass_mode(hourglass, x, moduli, None)
+            self.hourglass_mode(hourglass, x, &self.gradient(x), moduli, None)
         })
     }
 
@@ -192,6 +194,7 @@ impl MembraneElement {
         &self,
         hourglass: &Hourglass,
         x: &[Vector3<f64>],
+        f_centre: &Matrix3x2<f64>,
         moduli: &HourglassModuli,
         mut forces: Option<&mut [Vector3<f64>; 4]>,
     ) -> f64 {
@@ -222,7 +225,6 @@ impl MembraneElement {
             }
         }
         // yarns: 1/2 k_y (y . q)^2, y = F a0 / |F a0|
-        let f_centre = self.gradient(x);
         for (fibre, factor) in [self.fibres.warp, self.fibres.weft]
             .iter()
             .zip(hourglass.yarn_factors)
@@ -492,7 +494,7 @@ mod tests {
             })
             .collect();
         let mut forces = [Vector3::zeros(); 4];
-        e.hourglass_forces(&x, &MODULI, &mut forces);
+        e.hourglass_forces(&x, &e.gradient(&x), &MODULI, &mut forces);
         let total: Vector3<f64> = forces.iter().sum();
         assert!(total.norm() < 1e-13, "{total}");
         let moment: Vector3<f64> = forces.iter().zip(&x).map(|(f, p)| p.cross(f)).sum();

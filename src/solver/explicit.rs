@@ -754,7 +754,7 @@ fn element_loop(
                 let (n_damping, power) =
                     yarn_damping_resultant(&kin, xi, element_step, modulus, thickness);
                 result.forces = e.internal_forces(&f, &(response.n + n_damping));
-                e.hourglass_forces(positions, &model.hourglass, &mut result.forces);
+                e.hourglass_forces(positions, &f, &model.hourglass, &mut result.forces);
                 let xi_total = xi + material_damping_ratio(viscosity, modulus, element_step);
                 result.stable_step = element_step * step_reduction(xi_total);
                 result.damping_power = power * e.area;
