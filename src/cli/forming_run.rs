@@ -13,6 +13,7 @@ use crate::io::output_folder::ProductFiles;
 use crate::io::plot::{write_map_png, write_png, LinePlot, LineStyle, MapPlot, Series};
 use crate::io::vtk::PvdSeries;
 use crate::io::CsvStream;
+use crate::solver::SolverKind;
 use std::path::{Path, PathBuf};
 
 #[derive(clap::Args, Debug)]
@@ -48,7 +49,13 @@ fn forming(args: &Args) -> anyhow::Result<()> {
             }),
         },
     };
-    eprintln!("{}", forming.estimate.describe());
+    match forming.solver {
+        SolverKind::Explicit => eprintln!("{}", forming.estimate.describe()),
+        SolverKind::Implicit => eprintln!(
+            "implicit quasi-static run of {} elements at the physical punch speed",
+            forming.model.elements.len()
+        ),
+    }
     let stop = interrupt_flag()?;
     let mut bar = Bar::new(forming.settings.end_time);
     let mut watch = Watch {
@@ -234,6 +241,7 @@ fn print_summary(
                 }
             ),
         ),
+        ("solver", solver_row(forming, result)),
         ("steps", format!("{}", result.steps)),
         (
             "stroke reached",
@@ -290,4 +298,12 @@ fn print_summary(
         ),
     ];
     print_checked_table(&rows, &result.checks, &forming.estimate, files);
+}
+
+/// The solver, and for the implicit one its increments, iterations and time split.
+fn solver_row(forming: &FormingModel, result: &FormingRun) -> String {
+    match &result.implicit {
+        Some(s) => super::shared::implicit_summary(s),
+        None => forming.solver.name().to_string(),
+    }
 }

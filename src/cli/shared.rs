@@ -141,6 +141,11 @@ pub fn status_row(outcome: &Result<State, SolverError>) -> (&'static str, String
             "stopped by the {} check at step {}, t = {:.4e} s, results so far kept",
             stop.check, stop.step, stop.time
         ),
+        Err(SolverError::NotConverged {
+            increment, time, ..
+        }) => format!(
+            "did not converge: increment {increment} from t = {time:.4e} s, results so far kept"
+        ),
         Err(SolverError::Settings(_)) => "not started: bad solver settings".to_string(),
     };
     ("status", status)
@@ -211,6 +216,21 @@ pub fn print_checked_table(
     for line in checks.warnings() {
         eprintln!("warning: {}: {}: {}", line.name, line.status, line.figure);
     }
+}
+
+/// Increments, iterations, factorisations and the time split of an implicit run, one line.
+pub fn implicit_summary(s: &crate::solver::implicit::ImplicitStatistics) -> String {
+    format!(
+        "implicit: {} increments ({} cut), {} Newton iterations ({} on the projected tangent), \
+         {} factorisations; assembly {:.2} s, factorisation and solve {:.2} s",
+        s.increments,
+        s.cut_increments,
+        s.iterations,
+        s.projected,
+        s.factorisations,
+        s.assembly_seconds,
+        s.solve_seconds
+    )
 }
 
 #[cfg(test)]

@@ -2,13 +2,14 @@
 //! progress bar and a summary table.
 
 use super::shared::{
-    interrupt_flag, print_checked_table, status_row, take_output_folder, with_threads, Bar, Watch,
+    implicit_summary, interrupt_flag, print_checked_table, status_row, take_output_folder,
+    with_threads, Bar, Watch,
 };
 use crate::experiment::bias_extension::{BiasExtension, BiasRow};
 use crate::experiment::picture_frame::{PictureFrame, PictureFrameRow};
 use crate::experiment::sheet_test::{
-    quasi_static_time_scaling, FrameOutput, HistorySink, LiveOutput, Progress, Record, SheetTest,
-    TestProcess, TestRun, QUASI_STATIC_SPEED_RATIO,
+    quasi_static_time_scaling, FrameOutput, HistorySink, LiveOutput, Progress, Record, RunSummary,
+    SheetTest, TestProcess, TestRun, QUASI_STATIC_SPEED_RATIO,
 };
 use crate::experiment::uniaxial::{UniaxialRow, UniaxialTension};
 use crate::io::output_folder::ProductFiles;
@@ -18,6 +19,7 @@ use crate::io::CsvStream;
 use crate::material::MaterialCard;
 use crate::mesh::DiagonalPattern;
 use crate::solver::estimate::{self, RunEstimate};
+use crate::solver::SolverKind;
 use std::path::{Path, PathBuf};
 
 #[derive(clap::Subcommand, Debug)]
@@ -78,6 +80,11 @@ pub struct CommonArgs {
     /// Worker threads for the element loop (default: all cores).
     #[arg(long)]
     threads: Option<usize>,
+    /// Solver: explicit (central differences; the test's time and mass scaling) or implicit
+    /// (quasi-static Newton increments at the physical speed; --time-scaling and
+    /// --target-step are refused with it), docs/solver.md.
+    #[arg(long, value_enum, default_value_t = SolverKind::Explicit)]
+    solver: SolverKind,
 }
 
 impl CommonArgs {
@@ -114,6 +121,13 @@ impl CommonArgs {
 
     /// Overrides a test's default process with the options given.
     fn apply(&self, p: &mut TestProcess) {
+        p.solver = self.solver;
+        if self.solver == SolverKind::Implicit {
+            // the implicit run has no inertia: the test's scalings are left out unless given
+            // (and then refused by the test's checks, naming them)
+            p.time_scaling = 1.0;
+            p.target_time_step = None;
+        }
         p.pattern = self.pattern;
         p.damping = self.damping;
         p.history_points = self.history_points.max(2);
@@ -298,20 +312,28 @@ fn sheet_test<T: SheetTest>(
         eprintln!("note: {line}");
     }
     let test = &*test;
-    warn_if_dynamic(test, card).map_err(refuse)?;
     let estimate = test
         .estimate(&card.laminate, card.density)
         .map_err(refuse)?;
-    estimate::check_steps(
-        &estimate,
-        (
-            "--element-size or --target-step (the step)",
-            "--speed or --time-scaling",
-            "--target-step",
+    match test.process().solver {
+        SolverKind::Explicit => {
+            warn_if_dynamic(test, card).map_err(refuse)?;
+            estimate::check_steps(
+                &estimate,
+                (
+                    "--element-size or --target-step (the step)",
+                    "--speed or --time-scaling",
+                    "--target-step",
+                ),
+            )
+            .map_err(refuse)?;
+            eprintln!("{}", estimate.describe());
+        }
+        SolverKind::Implicit => eprintln!(
+            "implicit quasi-static run of {} elements at the physical crosshead speed",
+            estimate.size.elements
         ),
-    )
-    .map_err(refuse)?;
-    eprintln!("{}", estimate.describe());
+    }
     let p = test.process();
     let shape = (test.settings().end_time, p.time_scaling);
     let history = |mut csv: CsvStream| -> HistorySink<'_, Record> {
@@ -360,7 +382,7 @@ fn choose_defaults<T: SheetTest>(
             length / h
         ));
     }
-    if c.speed.is_none() && c.time_scaling.is_none() {
+    if c.speed.is_none() && c.time_scaling.is_none() && c.solver == SolverKind::Explicit {
         let ratio = test.speed_to_shear_wave(&card.laminate, card.density)?;
         let scaling = test.process().time_scaling;
         if let Some(lower) = quasi_static_time_scaling(ratio, scaling) {
@@ -678,6 +700,7 @@ fn print_summary(
     let rows = [
         status_row(&run.outcome),
         ("defaults chosen", defaults),
+        ("solver", solver_summary(s)),
         ("steps", format!("{}", s.steps)),
         ("elements", format!("{}", s.elements)),
         (
@@ -721,5 +744,13 @@ fn known(value: f64, text: impl FnOnce() -> String) -> String {
         text()
     } else {
         "- (the run stopped)".into()
+    }
+}
+
+/// The solver, and for the implicit one its increments, iterations and time split.
+fn solver_summary(s: &RunSummary) -> String {
+    match &s.implicit {
+        Some(i) => implicit_summary(i),
+        None => "explicit".to_string(),
     }
 }

@@ -2,6 +2,7 @@
 //! standard tool shapes, and penalty contact with Coulomb friction.
 
 pub mod penalty;
+pub mod potential;
 pub mod rigid_tool;
 pub mod stl;
 pub mod surface;

@@ -38,7 +38,7 @@
 
 use super::MembraneElement;
 use crate::mesh::Mesh;
-use nalgebra::{Matrix2, Matrix3, Matrix6, Vector2, Vector3};
+use nalgebra::{DMatrix, Matrix2, Matrix3, Matrix6, Vector2, Vector3};
 use rayon::prelude::*;
 use std::collections::HashMap;
 
@@ -159,6 +159,76 @@ impl Bending {
             *f += g;
         }
         energy
+    }
+
+    /// Tangent stiffness of patch `t` at `x`, `d forces / dx` over its nodes (3 rows and
+    /// columns per node, in patch order). With `exact`, central differences of
+    /// [`Self::forces`]; otherwise its Gauss–Newton part `J^T H J`, `J = dk/dx` the curvature's
+    /// Jacobian (the normal's turn included) and `H = d^2 W / dk^2`: positive semi-definite,
+    /// what is left out is the moment times the curvature's second derivative, small next to
+    /// it while the heights over the patch are small against its size (docs/solver.md).
+    pub fn stiffness(&self, t: &BendingPatch, x: &[Vector3<f64>], exact: bool) -> DMatrix<f64> {
+        let size = 3 * t.nodes.len();
+        if exact {
+            return self.difference_stiffness(t, x);
+        }
+        let frame = CurrentPlane::of(t, x);
+        // J: row m the gradient of curvature component m
+        let mut jacobian = DMatrix::<f64>::zeros(3, size);
+        for m in 0..3 {
+            let mut lever = Vector3::zeros();
+            for i in 3..t.nodes.len() {
+                let g = t.curvature_operator[i][m];
+                for d in 0..3 {
+                    jacobian[(m, 3 * i + d)] += g * frame.normal[d];
+                    jacobian[(m, d)] -= g * frame.normal[d];
+                }
+                lever += (x[t.nodes[i]] - frame.origin) * g;
+            }
+            for (c, g) in frame.normal_gradient(&lever).iter().enumerate() {
+                for d in 0..3 {
+                    jacobian[(m, 3 * c + d)] += g[d];
+                }
+            }
+        }
+        let h = self.curvature_hessian(t);
+        jacobian.transpose() * h * jacobian
+    }
+
+    /// `d^2 (A W) / dk^2`, constant: the energy is quadratic in the curvature change.
+    fn curvature_hessian(&self, t: &BendingPatch) -> Matrix3<f64> {
+        let mut h = Matrix3::zeros();
+        for m in 0..3 {
+            let mut unit = Vector3::zeros();
+            unit[m] = 1.0;
+            h.set_column(m, &self.energy_and_moments(t, &unit).1);
+        }
+        h
+    }
+
+    fn difference_stiffness(&self, t: &BendingPatch, x: &[Vector3<f64>]) -> DMatrix<f64> {
+        let n = t.nodes.len();
+        let mut k = DMatrix::zeros(3 * n, 3 * n);
+        let step = 1e-6 * t.altitude;
+        let mut y = x.to_vec();
+        let mut plus = vec![Vector3::zeros(); n];
+        let mut minus = vec![Vector3::zeros(); n];
+        for j in 0..n {
+            for d in 0..3 {
+                let node = t.nodes[j];
+                y[node][d] = x[node][d] + step;
+                self.forces(t, &y, &mut plus);
+                y[node][d] = x[node][d] - step;
+                self.forces(t, &y, &mut minus);
+                y[node][d] = x[node][d];
+                for i in 0..n {
+                    for e in 0..3 {
+                        k[(3 * i + e, 3 * j + d)] = (plus[i][e] - minus[i][e]) / (2.0 * step);
+                    }
+                }
+            }
+        }
+        k
     }
 
     /// Bending energy of triangle `t` (N·mm).

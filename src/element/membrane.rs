@@ -165,6 +165,126 @@ impl MembraneElement {
         self.shape_gradients.map(|g| fn_area * g)
     }
 
+    /// Tangent stiffness `K_ab = d f_a / d x_b` of the one-point membrane forces
+    /// (docs/solver.md, "Implicit", element tangent): `K_ab = A0 (B_a^T D B_b + (g_a . N g_b) I)`
+    /// with `B_a` the map from `x_a` to the Green strain `(E11, E22, 2 E12)`,
+    /// `B_a = [g_a1 F1^T; g_a2 F2^T; g_a1 F2^T + g_a2 F1^T]` (`F1`, `F2` the columns of `F`),
+    /// `D = dN/dE` the laminate's tangent in the same order, and the second term the
+    /// geometric stiffness of the resultant `N`. Blocks for the corners in order; the fourth
+    /// row and column are zero for a triangle.
+    pub fn stiffness(
+        &self,
+        f: &Matrix3x2<f64>,
+        n: &Matrix2<f64>,
+        d: &Matrix3<f64>,
+    ) -> [[Matrix3<f64>; 4]; 4] {
+        let (f1, f2) = (f.column(0).into_owned(), f.column(1).into_owned());
+        let b: [Matrix3<f64>; 4] = self.shape_gradients.map(|g| {
+            Matrix3::from_rows(&[
+                (f1 * g.x).transpose(),
+                (f2 * g.y).transpose(),
+                (f2 * g.x + f1 * g.y).transpose(),
+            ])
+        });
+        let corners = self.nodes().len();
+        let mut k = [[Matrix3::zeros(); 4]; 4];
+        for a in 0..corners {
+            let bt_d = b[a].transpose() * d * self.area;
+            for c in 0..corners {
+                let geometric = self.shape_gradients[a].dot(&(n * self.shape_gradients[c]));
+                k[a][c] = bt_d * b[c] + Matrix3::identity() * (geometric * self.area);
+            }
+        }
+        k
+    }
+
+    /// Tangent stiffness of the hourglass forces ([`Self::hourglass_forces`]) at `x`, by
+    /// central differences of those exact forces (`exact`), or its Gauss–Newton part, positive
+    /// semi-definite: `k_s gamma_a gamma_b (I - n n^T)` for the shear and
+    /// `k_y (d(y.q)/dx_a) (d(y.q)/dx_b)^T` for the yarns, the turn of the normal and of the
+    /// yarn left out. Zero for a triangle.
+    pub fn hourglass_stiffness(
+        &self,
+        x: &[Vector3<f64>],
+        moduli: &HourglassModuli,
+        exact: bool,
+    ) -> [[Matrix3<f64>; 4]; 4] {
+        let mut k = [[Matrix3::zeros(); 4]; 4];
+        let Some(hourglass) = &self.hourglass else {
+            return k;
+        };
+        let corners: Vec<Vector3<f64>> = self.nodes().iter().map(|&n| x[n]).collect();
+        let local = Self {
+            cell: Cell::Quad([0, 1, 2, 3]),
+            ..self.clone()
+        };
+        if exact {
+            let scale = self.area.sqrt();
+            let h = 1e-6 * scale;
+            let forces_at = |y: &[Vector3<f64>]| {
+                let mut f = [Vector3::zeros(); 4];
+                local.hourglass_forces(y, &local.gradient(y), moduli, &mut f);
+                f
+            };
+            for c in 0..4 {
+                for dir in 0..3 {
+                    let mut plus = corners.clone();
+                    let mut minus = corners.clone();
+                    plus[c][dir] += h;
+                    minus[c][dir] -= h;
+                    let (fp, fm) = (forces_at(&plus), forces_at(&minus));
+                    for a in 0..4 {
+                        let column = (fp[a] - fm[a]) / (2.0 * h);
+                        k[a][c].set_column(dir, &column);
+                    }
+                }
+            }
+            return k;
+        }
+        let q: Vector3<f64> = corners
+            .iter()
+            .zip(hourglass.gamma)
+            .map(|(x, g)| x * g)
+            .sum();
+        let area_vector = 0.5 * (corners[2] - corners[0]).cross(&(corners[3] - corners[1]));
+        let n = area_vector
+            .try_normalize(0.0)
+            .unwrap_or_else(Vector3::zeros);
+        let tangential = Matrix3::identity() - n * n.transpose();
+        let k_s = moduli.shear * hourglass.shear_factor;
+        for (row, gamma_a) in k.iter_mut().zip(hourglass.gamma) {
+            for (block, gamma_c) in row.iter_mut().zip(hourglass.gamma) {
+                *block = tangential * (k_s * gamma_a * gamma_c);
+            }
+        }
+        let f_centre = local.gradient(&corners);
+        for (fibre, factor) in [self.fibres.warp, self.fibres.weft]
+            .iter()
+            .zip(hourglass.yarn_factors)
+        {
+            let k_y = moduli.yarn * factor;
+            let along = f_centre * fibre.xy();
+            let length = along.norm();
+            if k_y == 0.0 || length == 0.0 {
+                continue;
+            }
+            let y = along / length;
+            let across = (q - y * y.dot(&q)) / length;
+            let d: Vec<Vector3<f64>> = self
+                .shape_gradients
+                .iter()
+                .zip(hourglass.gamma)
+                .map(|(g, gamma)| y * gamma + across * g.dot(&fibre.xy()))
+                .collect();
+            for a in 0..4 {
+                for c in 0..4 {
+                    k[a][c] += d[a] * d[c].transpose() * k_y;
+                }
+            }
+        }
+        k
+    }
+
     /// The hourglass forces `dW/dx_a` of a quadrilateral at the positions `x` (`f` its centre
     /// gradient there, as the element loop has it), added to
     /// `forces`, the turn of the tangent plane and of the yarns with `x` included (the forces

@@ -13,6 +13,7 @@ use super::sheet_test::{
 use crate::material::Laminate;
 use crate::mesh::DiagonalPattern;
 use crate::solver::Model;
+use crate::solver::SolverKind;
 use nalgebra::Vector3;
 
 /// Cells across the width of the default mesh: the shear zones of a bias specimen are a third
@@ -62,6 +63,7 @@ impl BiasExtension {
             length: 450.0,
             ply_angle: 45.0,
             process: TestProcess {
+                solver: SolverKind::Explicit,
                 element_size: 15.0,
                 pattern: DiagonalPattern::Crossed,
                 temperature,

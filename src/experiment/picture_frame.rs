@@ -27,6 +27,7 @@ use super::sheet_test::{
 };
 use crate::material::Laminate;
 use crate::mesh::{rectangle, DiagonalPattern, Mesh};
+use crate::solver::SolverKind;
 use crate::solver::{Constraint, Model, Motion, State};
 use nalgebra::Vector3;
 use std::f64::consts::{FRAC_PI_4, SQRT_2};
@@ -133,6 +134,7 @@ impl PictureFrame {
         Self {
             side: 150.0,
             process: TestProcess {
+                solver: SolverKind::Explicit,
                 element_size: 37.5,
                 pattern: DiagonalPattern::Crossed,
                 temperature,

@@ -7,8 +7,9 @@ use crate::material::Laminate;
 use crate::mesh::{rectangle, DiagonalPattern};
 use crate::solver::checks::{self, CheckReport, CheckSettings};
 use crate::solver::estimate::{self, RunEstimate};
+use crate::solver::implicit::{self, ImplicitSettings, ImplicitStatistics};
 use crate::solver::{
-    Constraint, Energies, Model, Motion, Observer, SolverError, SolverSettings, State,
+    Constraint, Energies, Model, Motion, Observer, SolverError, SolverKind, SolverSettings, State,
 };
 use nalgebra::Vector3;
 use std::sync::Arc;
@@ -49,6 +50,9 @@ impl Crosshead {
 /// speed, time and mass scaling, damping, and how many history records to keep.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TestProcess {
+    /// Which solver runs the test; the implicit one runs at the physical speed, without time
+    /// or mass scaling.
+    pub solver: SolverKind,
     /// Wanted edge length of the mesh cells (mm); each side gets a whole number of them.
     pub element_size: f64,
     /// How the cells are cut into triangles.
@@ -90,6 +94,19 @@ impl TestProcess {
         }
         if !(self.damping.is_finite() && self.damping >= 0.0) {
             return Err(format!("damping = {} must be >= 0", self.damping));
+        }
+        if self.solver == SolverKind::Implicit {
+            let explicit_only = [
+                ("time scaling", self.time_scaling != 1.0),
+                ("target time step", self.target_time_step.is_some()),
+                ("damping", self.damping != 0.0),
+            ];
+            if let Some((name, _)) = explicit_only.iter().find(|(_, set)| *set) {
+                return Err(format!(
+                    "{name}: only the explicit solver uses it; the implicit solver runs at the \
+                     physical speed without inertia"
+                ));
+            }
         }
         if !self.temperature.is_finite() {
             return Err(format!(
@@ -247,7 +264,7 @@ pub trait SheetTest {
         let settle_time = 2.0 * self.process().crosshead().ramp_time;
         let run = run_sheet_test(
             &model,
-            &self.settings(),
+            (self.process().solver, &self.settings()),
             &measure,
             output,
             progress,
@@ -296,6 +313,8 @@ pub struct RunSummary {
     pub worst_kinetic_ratio: f64,
     pub wall_seconds: f64,
     pub threads: usize,
+    /// Increments, iterations and time split of an implicit run.
+    pub implicit: Option<ImplicitStatistics>,
 }
 
 impl RunSummary {
@@ -449,7 +468,7 @@ pub fn write_frame(
 /// count for the energy figures of the summary.
 pub fn run_sheet_test(
     model: &Model,
-    settings: &SolverSettings,
+    (solver, settings): (SolverKind, &SolverSettings),
     measure: &dyn Fn(&Model, &State) -> Reading,
     output: Option<LiveOutput<'_, Record>>,
     progress: Option<&mut dyn Progress>,
@@ -468,6 +487,7 @@ pub fn run_sheet_test(
     let bounds = checks::force_bound(model).and_then(|force| {
         checks::carried_kinetic_energy(model, settings, speed).map(|work| (force, work))
     });
+    let mut statistics = None;
     let (outcome, checks) = match bounds {
         Ok((force_bound, loaded_work)) => {
             let check = CheckSettings {
@@ -476,7 +496,19 @@ pub fn run_sheet_test(
                 loaded_work,
                 dynamic_advice: "lower --speed or --time-scaling (or --target-step)",
             };
-            checks::run(model, settings, check, &mut recorder)
+            match solver {
+                SolverKind::Explicit => checks::run(model, settings, check, &mut recorder),
+                SolverKind::Implicit => {
+                    let implicit =
+                        ImplicitSettings::new(settings.end_time, settings.output_interval);
+                    checks::watched(model, check, &mut recorder, |observer| {
+                        implicit::run(model, &implicit, observer).map(|(state, s)| {
+                            statistics = Some(s);
+                            state
+                        })
+                    })
+                }
+            }
         }
         Err(e) => (Err(SolverError::Settings(e)), CheckReport::default()),
     };
@@ -510,6 +542,7 @@ pub fn run_sheet_test(
             worst_kinetic_ratio,
             wall_seconds,
             threads: rayon::current_num_threads(),
+            implicit: statistics,
         },
         records: recorder.records,
         outcome,

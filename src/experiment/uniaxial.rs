@@ -16,6 +16,7 @@ use super::sheet_test::{
 use crate::material::Laminate;
 use crate::mesh::DiagonalPattern;
 use crate::solver::Model;
+use crate::solver::SolverKind;
 use nalgebra::Vector3;
 
 /// A strip tension test: specimen, ply angle, and the shared process settings.
@@ -73,6 +74,7 @@ impl UniaxialTension {
             length: 150.0,
             ply_angle: 0.0,
             process: TestProcess {
+                solver: SolverKind::Explicit,
                 element_size: 12.5,
                 pattern: DiagonalPattern::Crossed,
                 temperature,

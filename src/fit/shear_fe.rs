@@ -38,6 +38,7 @@ use crate::material::card::SHEAR_CHECK_LIMIT_DEG;
 use crate::material::fabric::ShearInteraction;
 use crate::material::{Laminate, Layer, MaterialCard, MaterialLaw, WovenFabric};
 use crate::mesh::DiagonalPattern;
+use crate::solver::SolverKind;
 use nalgebra::{DMatrix, DVector};
 use std::sync::Arc;
 use std::time::Instant;
@@ -202,6 +203,7 @@ impl RefineSettings {
             length: self.length,
             ply_angle: 45.0,
             process: TestProcess {
+                solver: SolverKind::Explicit,
                 element_size: fe.element_size,
                 pattern: DiagonalPattern::Crossed,
                 temperature: fe.temperature,

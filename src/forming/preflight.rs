@@ -95,3 +95,16 @@ pub fn check_model(
     .map_err(on)?;
     Ok(estimate)
 }
+
+/// The estimate of the built model for the implicit solver, refused only when its memory does
+/// not fit: its increments do not follow the explicit stable step.
+pub fn check_memory_of(
+    s: &Scenario,
+    model: &Model,
+    settings: &SolverSettings,
+) -> Result<RunEstimate, String> {
+    let on = |e: String| format!("{}: {e}", s.origin);
+    let estimate = estimate::estimate(model, settings).map_err(on)?;
+    estimate::check_memory(estimate.memory, RECTANGLE_KEYS).map_err(on)?;
+    Ok(estimate)
+}

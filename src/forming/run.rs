@@ -5,7 +5,8 @@
 use super::setup::FormingModel;
 use crate::experiment::sheet_test::{LiveOutput, Progress};
 use crate::solver::checks::{self, CheckReport, CheckSettings};
-use crate::solver::{Energies, Model, Observer, SolverError, State};
+use crate::solver::implicit::{self, ImplicitSettings, ImplicitStatistics};
+use crate::solver::{Energies, Model, Observer, SolverError, SolverKind, State};
 use nalgebra::Vector3;
 use std::time::Instant;
 
@@ -40,6 +41,8 @@ pub struct FormingRun {
     pub wall_seconds: f64,
     /// The run-time checks (`solver::checks`).
     pub checks: CheckReport,
+    /// Increments, iterations and time split of an implicit run.
+    pub implicit: Option<ImplicitStatistics>,
 }
 
 struct Recorder<'a, 'p, 'o> {
@@ -127,8 +130,25 @@ pub fn run(
         last_impulse: None,
         stopping: false,
     };
+    let mut statistics = None;
     let (outcome, checks) = match check_settings(forming) {
-        Ok(check) => checks::run(&forming.model, &forming.settings, check, &mut recorder),
+        Ok(check) => match forming.solver {
+            SolverKind::Explicit => {
+                checks::run(&forming.model, &forming.settings, check, &mut recorder)
+            }
+            SolverKind::Implicit => {
+                let settings = ImplicitSettings::new(
+                    forming.settings.end_time,
+                    forming.settings.output_interval,
+                );
+                checks::watched(&forming.model, check, &mut recorder, |observer| {
+                    implicit::run(&forming.model, &settings, observer).map(|(state, s)| {
+                        statistics = Some(s);
+                        state
+                    })
+                })
+            }
+        },
         Err(e) => (Err(SolverError::Settings(e)), CheckReport::default()),
     };
     let steps = match &outcome {
@@ -141,6 +161,7 @@ pub fn run(
         steps,
         wall_seconds: start.elapsed().as_secs_f64(),
         checks,
+        implicit: statistics,
     }
 }
 

@@ -4,6 +4,7 @@
 
 use crate::io::{from_toml_text, from_toml_value};
 use crate::mesh::DiagonalPattern;
+use crate::solver::SolverKind;
 use nalgebra::Vector3;
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
@@ -335,6 +336,10 @@ pub struct Process {
     pub time_scaling: f64,
     /// Mass scaling to this time step (s).
     pub target_time_step: Option<f64>,
+    /// `"explicit"` (the default) or `"implicit"` (docs/solver.md): the implicit solver runs
+    /// the physical stroke quasi-statically, without time or mass scaling.
+    #[serde(default)]
+    pub solver: SolverKind,
 }
 
 fn one() -> f64 {
@@ -531,6 +536,19 @@ impl Scenario {
 
     fn check_process(&self) -> Result<(), String> {
         let p = &self.process;
+        if p.solver == SolverKind::Implicit {
+            let explicit_only = [
+                ("process.time_scaling", p.time_scaling != 1.0),
+                ("process.target_time_step", p.target_time_step.is_some()),
+            ];
+            if let Some((key, _)) = explicit_only.iter().find(|(_, set)| *set) {
+                return Err(format!(
+                    "{key} is only used by the explicit solver; with process.solver = \
+                     \"implicit\" the stroke runs at the physical speed without inertia: leave \
+                     {key} out"
+                ));
+            }
+        }
         positive("process.stroke", p.stroke)?;
         positive("process.punch_speed", p.punch_speed)?;
         if !(p.temperature.is_finite()) {

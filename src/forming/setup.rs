@@ -17,6 +17,7 @@ use crate::material::MaterialCard;
 use crate::mesh::orientation::{describe_poor_projections, poor_projections, reference_warp};
 use crate::mesh::{read_mesh_file, rectangle, DiagonalPattern, Mesh};
 use crate::solver::estimate::RunEstimate;
+use crate::solver::SolverKind;
 use crate::solver::{Constraint, Model, Motion, SolverSettings};
 use nalgebra::Vector3;
 use std::collections::BTreeMap;
@@ -40,6 +41,9 @@ pub struct FormingModel {
     pub card: MaterialCard,
     pub punch: Crosshead,
     pub settings: SolverSettings,
+    /// Which solver runs the model (`process.solver`); the implicit one takes the end time and
+    /// output interval of `settings`.
+    pub solver: SolverKind,
     /// Distance from the punch's ridge (axis) beyond which the blank lies on the die's flat
     /// face: the flange (mm); infinite when unknown (tools from files without
     /// `tools.flange_radius`), which turns the flange measures off.
@@ -136,7 +140,10 @@ impl FormingModel {
             damping: 0.0,
             yarn_damping: 0.06,
         };
-        let estimate = preflight::check_model(s, &model, &settings, punch.speed)?;
+        let estimate = match p.solver {
+            SolverKind::Explicit => preflight::check_model(s, &model, &settings, punch.speed)?,
+            SolverKind::Implicit => preflight::check_memory_of(s, &model, &settings)?,
+        };
         let flange_radius = match &s.tools {
             ToolSet::BuiltIn(t) => t.die_opening_radius + t.die_fillet_radius,
             ToolSet::Files(f) => f.flange_radius.unwrap_or(f64::INFINITY),
@@ -146,6 +153,7 @@ impl FormingModel {
             card,
             punch,
             settings,
+            solver: p.solver,
             flange_radius,
             ridge_half_length: s.ridge_half_length(),
             element_size,

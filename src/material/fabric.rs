@@ -4,7 +4,8 @@
 //! `W = W_t,warp(I4) + W_t,weft(I6) + W_s(I10)`, energy per unit reference volume of layer B:
 //! - yarn tension `W_t(I) = sum_k (A_k / k) (sqrt(I) - 1)^k`, `k = 2..n`, for `sqrt(I) > 1`;
 //!   in compression `W_t = (f A_2 / 2) (sqrt(I) - 1)^2`, a fraction `f` of the initial tensile
-//!   stiffness `A_2`, so that yarns buckle instead of carrying compression;
+//!   stiffness `A_2`, so that yarns buckle instead of carrying compression; the change of slope
+//!   spread over `|sqrt(I) - 1| < SLACK_BAND`;
 //! - in-plane shear `W_s(I10) = sum_k c_k I10^k`, `k = 1..m`, `I10 = I8^2 / (I4 I6) = sin^2(gamma)`.
 //!
 //! State variables: none (hyperelastic). The fibre directions come with each point.
@@ -14,6 +15,13 @@ use super::{
 };
 use nalgebra::{Matrix3, Vector3};
 use std::sync::Arc;
+
+/// Half-width of the strain band `|lambda - 1| < SLACK_BAND` over which a yarn's stiffness goes
+/// from slack (`f A_2`) to taut (`A_2`) **(choice)**: a kink there would leave the tangent of
+/// Newton's method undefined where the yarns of a shearing fabric sit, at their rest length
+/// (docs/model.md §3). Outside the band the tension is the law's; inside, it differs from the
+/// kinked law by at most `A_2 SLACK_BAND / 4`.
+pub const SLACK_BAND: f64 = 1e-4;
 
 /// Tension energy of one yarn family as a function of its stretch.
 #[derive(Clone, Debug, PartialEq)]
@@ -42,30 +50,70 @@ impl YarnTension {
     /// `W_t` as a function of the yarn stretch `lambda = sqrt(I)`.
     pub fn energy(&self, stretch: f64) -> f64 {
         let e = stretch - 1.0;
-        if e <= 0.0 {
+        if e <= -SLACK_BAND {
             return 0.5 * self.compression_stiffness * e * e;
         }
-        self.coefficients
+        let higher: f64 = self
+            .coefficients
             .iter()
             .enumerate()
+            .skip(1)
             .map(|(i, a)| {
                 let k = (i + 2) as i32;
-                a / k as f64 * e.powi(k)
+                a / k as f64 * e.max(0.0).powi(k)
             })
-            .sum()
+            .sum();
+        self.linear_part_energy(e) + higher
+    }
+
+    /// The energy of the linear part of the tension (`A_2 e` taut, `f A_2 e` slack), its slope
+    /// blended linearly across `|e| < SLACK_BAND`.
+    fn linear_part_energy(&self, e: f64) -> f64 {
+        let (a2, f_a2) = (self.initial_stiffness(), self.compression_stiffness);
+        let d = SLACK_BAND;
+        if e <= -d {
+            return 0.5 * f_a2 * e * e;
+        }
+        let s = (e + d).min(2.0 * d);
+        let band = 0.5 * f_a2 * d * d - f_a2 * d * s
+            + 0.5 * f_a2 * s * s
+            + (a2 - f_a2) * s * s * s / (12.0 * d);
+        if e <= d {
+            band
+        } else {
+            // past the band, the taut energy shifted by what the blend changed at its edge
+            band + 0.5 * a2 * (e * e - d * d)
+        }
+    }
+
+    /// The linear part of the tension, see [`Self::linear_part_energy`].
+    fn linear_part_tension(&self, e: f64) -> f64 {
+        let (a2, f_a2) = (self.initial_stiffness(), self.compression_stiffness);
+        let d = SLACK_BAND;
+        if e <= -d {
+            f_a2 * e
+        } else if e >= d {
+            a2 * e
+        } else {
+            -f_a2 * d + f_a2 * (e + d) + (a2 - f_a2) * (e + d) * (e + d) / (4.0 * d)
+        }
+    }
+
+    fn initial_stiffness(&self) -> f64 {
+        self.coefficients.first().copied().unwrap_or(0.0)
     }
 
     /// `dW_t/dlambda`: the yarn tension per unit reference area of the layer (MPa).
     pub fn tension(&self, stretch: f64) -> f64 {
         let e = stretch - 1.0;
-        if e <= 0.0 {
-            return self.compression_stiffness * e;
-        }
-        self.coefficients
+        let higher: f64 = self
+            .coefficients
             .iter()
             .enumerate()
-            .map(|(i, a)| a * e.powi(i as i32 + 1))
-            .sum()
+            .skip(1)
+            .map(|(i, a)| a * e.max(0.0).powi(i as i32 + 1))
+            .sum();
+        self.linear_part_tension(e) + higher
     }
 
     /// Tangent `d tension / d lambda` (MPa), never below the initial tensile modulus `A_2`: a

@@ -88,6 +88,33 @@ impl MembraneKinematics {
     }
 }
 
+/// One backward-Euler step of an element's in-plane kinematics: `C` at its end, `C` at its
+/// start, its duration (s), the temperature and the yarns.
+#[derive(Clone, Copy, Debug)]
+pub struct BackwardEulerStep {
+    pub c: Matrix2<f64>,
+    pub c_start: Matrix2<f64>,
+    pub dt: f64,
+    pub temperature: f64,
+    pub fibres: FibreDirections,
+}
+
+impl BackwardEulerStep {
+    /// The kinematics at `c`, with the rate `(c - C_start) / dt`.
+    pub fn kinematics(&self, c: &Matrix2<f64>) -> MembraneKinematics {
+        MembraneKinematics {
+            c: *c,
+            c_dot: (c - self.c_start) / self.dt,
+            temperature: self.temperature,
+            fibres: self.fibres,
+        }
+    }
+}
+
+/// Step in the Green strain of the central differences of [`Laminate::step_tangent`]: the
+/// difference's truncation (`h^2`) and rounding (`1e-16 / h`) errors both near `1e-10`.
+const TANGENT_STEP: f64 = 1e-6;
+
 /// The laminate's state variables at one point: per layer, `lambda3` and `dlambda3/dt`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LaminateState {
@@ -206,6 +233,48 @@ impl Laminate {
             }
         }
         Ok(MembraneResponse { n, thickness })
+    }
+
+    /// The membrane resultant after a backward-Euler step (docs/solver.md, "Implicit"): the
+    /// in-plane `C` reached `dt` after `c_start`, the rate `Cdot = (C - C_start) / dt`, each
+    /// layer's thickness advanced from `start`. Returns the response, the advanced state and
+    /// the tangent `D = dN/dE` in the order `(E11, E22, 2 E12)` (N/mm), by central differences
+    /// of the response in `E` **(choice)**: the plane-stress solve of every layer makes an
+    /// analytic tangent long, and six more responses per element cost less than the solve
+    /// they feed (docs/performance.md).
+    pub fn step_tangent(
+        &self,
+        step: &BackwardEulerStep,
+        start: &LaminateState,
+    ) -> Result<(MembraneResponse, LaminateState, Matrix3<f64>), MaterialError> {
+        let mut state = start.clone();
+        let response = self.membrane_response(&step.kinematics(&step.c), step.dt, &mut state)?;
+        let mut d = Matrix3::zeros();
+        for (column, unit) in [
+            Matrix2::new(2.0, 0.0, 0.0, 0.0),
+            Matrix2::new(0.0, 0.0, 0.0, 2.0),
+            Matrix2::new(0.0, 1.0, 1.0, 0.0),
+        ]
+        .iter()
+        .enumerate()
+        {
+            let at = |sign: f64| {
+                let c = step.c + unit * (sign * TANGENT_STEP);
+                let mut probe = start.clone();
+                self.membrane_response(&step.kinematics(&c), step.dt, &mut probe)
+                    .map(|r| r.n)
+            };
+            let difference = (at(1.0)? - at(-1.0)?) / (2.0 * TANGENT_STEP);
+            d.set_column(
+                column,
+                &nalgebra::Vector3::new(
+                    difference[(0, 0)],
+                    difference[(1, 1)],
+                    0.5 * (difference[(0, 1)] + difference[(1, 0)]),
+                ),
+            );
+        }
+        Ok((response, state, d))
     }
 
     /// Thickness-weighted mean of the layers' wave moduli (MPa) in an advanced state: with the
@@ -338,6 +407,26 @@ impl Laminate {
     ) -> Result<Matrix3<f64>, MaterialError> {
         let point = kin.layer_point(state.thickness_stretch[k], state.thickness_stretch_rate[k]);
         self.layers[k].law.second_piola_kirchhoff(&point)
+    }
+
+    /// The incremental potential of a backward-Euler step of `dt` per unit reference area,
+    /// `sum_k t_k (W_k + dt psi_k)` (N/mm), in a state advanced to `kin`: its derivative in `C`
+    /// is half the membrane resultant, what the implicit solver's line search lowers.
+    pub fn incremental_potential(
+        &self,
+        kin: &MembraneKinematics,
+        state: &LaminateState,
+        dt: f64,
+    ) -> Result<f64, MaterialError> {
+        self.layers
+            .iter()
+            .enumerate()
+            .try_fold(0.0, |sum, (k, layer)| {
+                let point =
+                    kin.layer_point(state.thickness_stretch[k], state.thickness_stretch_rate[k]);
+                let viscous = layer.law.viscous_potential(&point)?;
+                Ok(sum + layer.thickness * (layer.law.strain_energy(&point)? + dt * viscous))
+            })
     }
 
     /// Stored energy per unit reference area, `sum_k t_k W_k` (N/mm), in an advanced state.

@@ -185,11 +185,23 @@ pub fn run(
     check: CheckSettings,
     observer: &mut dyn Observer,
 ) -> (Result<State, SolverError>, CheckReport) {
+    watched(model, check, observer, |watched| {
+        explicit::run(model, settings, watched)
+    })
+}
+
+/// Runs `solve` (either solver) with the checks watching every record it makes.
+pub fn watched(
+    model: &Model,
+    check: CheckSettings,
+    observer: &mut dyn Observer,
+    solve: impl FnOnce(&mut dyn Observer) -> Result<State, SolverError>,
+) -> (Result<State, SolverError>, CheckReport) {
     let mut checked = Checked {
         inner: observer,
         watch: Watch::new(check, model.mesh.nodes.len()),
     };
-    let outcome = explicit::run(model, settings, &mut checked).map_err(|e| match e {
+    let outcome = solve(&mut checked).map_err(|e| match e {
         SolverError::Output { time, source } => match source.downcast::<CheckStop>() {
             Ok(stop) => SolverError::Check(stop),
             Err(source) => SolverError::Output { time, source },
@@ -388,6 +400,23 @@ impl Watch {
                 status: status(FORCES, false),
             },
         ];
+        let damping = self
+            .records
+            .iter()
+            .filter(|(t, e)| *t > self.settings.settle_time && e.internal_work > 0.0)
+            .map(|(_, e)| e.damping / e.internal_work)
+            .fold(0.0, f64::max);
+        if damping > 0.0 {
+            lines.push(CheckLine {
+                name: DAMPING,
+                figure: format!(
+                    "{:.3} % of the internal work at most (warning above {} %)",
+                    100.0 * damping,
+                    100.0 * DAMPING_WARNING
+                ),
+                status: status(DAMPING, damping > DAMPING_WARNING),
+            });
+        }
         if tools {
             lines.push(CheckLine {
                 name: PENETRATION,
@@ -407,6 +436,11 @@ const BALANCE: &str = "energy balance";
 const INTERNAL_WORK: &str = "internal work";
 const FORCES: &str = "forces";
 const PENETRATION: &str = "tool penetration";
+const DAMPING: &str = "damping / internal work";
+
+/// Work of the damping (the explicit solver's global damping, the implicit solver's drag) over
+/// the internal work above which the result is reported as biased by it.
+pub const DAMPING_WARNING: f64 = 0.05;
 
 /// `E_kin / W_int`, 0 before any internal work.
 fn kinetic_ratio(e: &Energies) -> f64 {

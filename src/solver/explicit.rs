@@ -119,6 +119,21 @@ pub enum SolverError {
     Output { time: f64, source: anyhow::Error },
     #[error("interrupted at step {step}, t = {time:.6e} s")]
     Interrupted { step: usize, time: f64 },
+    /// The implicit solver could not converge an increment however small (the results up to
+    /// the last converged one are kept).
+    #[error(
+        "increment {increment} from t = {time:.6e} s (last tried {increment_time:.3e} s) did not \
+         converge: {reason}; residual norms (N) {residuals:?}; largest residuals at nodes \
+         {worst_nodes:?}"
+    )]
+    NotConverged {
+        increment: usize,
+        time: f64,
+        increment_time: f64,
+        reason: String,
+        residuals: Vec<f64>,
+        worst_nodes: Vec<usize>,
+    },
     /// A run-time check ([`super::checks`]) found the result meaningless.
     #[error(transparent)]
     Check(super::checks::CheckStop),
@@ -400,7 +415,7 @@ fn gather_forces(forces: &InternalForces, nodal: &mut [Vector3<f64>]) {
 /// Elastic energy stored in the sheet, `sum_e A0 sum_k t_k W_k` plus the hinges' bending
 /// energy. The per-element energies are computed in parallel and summed in element order, so
 /// the total is the same on any thread count (it is only needed at the records).
-fn elastic_energy(model: &Model, state: &State) -> Result<f64, (usize, MaterialError)> {
+pub(crate) fn elastic_energy(model: &Model, state: &State) -> Result<f64, (usize, MaterialError)> {
     let membrane: Vec<Result<f64, (usize, MaterialError)>> = model
         .elements
         .par_iter()

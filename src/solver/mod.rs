@@ -1,13 +1,47 @@
-//! Explicit dynamics of the sheet (docs/model.md §6): central differences with lumped mass, stable
-//! step from the current wave speed, optional mass scaling, energy bookkeeping.
+//! The solvers of the sheet over one shared [`Model`]: explicit dynamics (docs/model.md §6,
+//! central differences with lumped mass, stable step from the current wave speed, optional mass
+//! scaling, energy bookkeeping) and quasi-static implicit increments (docs/solver.md).
 
 pub mod checks;
 pub mod energy;
 pub mod estimate;
 pub mod explicit;
+pub mod implicit;
 pub mod model;
 pub mod yarn_damping;
 
 pub use energy::Energies;
 pub use explicit::{run, InternalForces, Observer, SolverError, SolverSettings, State};
 pub use model::{Constraint, Model, Motion};
+
+/// Which solver runs a model (docs/solver.md, "Which solver").
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum SolverKind {
+    /// Central differences with lumped mass (`explicit`): the reference, and the tool for fast
+    /// events; quasi-static runs need mass or time scaling.
+    #[default]
+    Explicit,
+    /// Quasi-static Newton increments at the physical speed (`implicit`).
+    Implicit,
+}
+
+impl SolverKind {
+    /// From its name in scenario files and on the command line.
+    pub fn parse(name: &str) -> Result<Self, String> {
+        match name {
+            "explicit" => Ok(Self::Explicit),
+            "implicit" => Ok(Self::Implicit),
+            other => Err(format!(
+                "unknown solver \"{other}\": \"explicit\" or \"implicit\""
+            )),
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Explicit => "explicit",
+            Self::Implicit => "implicit",
+        }
+    }
+}

@@ -1,0 +1,252 @@
+//! Contact and friction of the quasi-static solver as potentials of the node's position
+//! (docs/solver.md, "Implicit"): what Newton's method needs, a force and its derivative.
+//!
+//! - **Normal**: the penalty energy `1/2 k (g - g_m)^2` while the gap `g = d - t/2` is below a
+//!   small margin `g_m` ([`contact_margin`]; `d` the signed distance of the node from the tool,
+//!   as in [`super::penalty`]), so the tool pushes with `-k (g - g_m) n`. The spring is that of the explicit solver without its mass:
+//!   `k = s m / dt^2` with `dt = h / c` is `s E t0 A / h^2` for a node of area `A` on elements of
+//!   size `h` and wave modulus `E` ([`penalty_stiffness`]).
+//! - **Friction**: regularised Coulomb with the normal force `lambda` and the tangent plane
+//!   (normal `n0`) of the start of the increment, as incremental-potential contact lags them:
+//!   `D(s) = mu lambda (sqrt(|s|^2 + eps^2) - eps)` of the slip `s = P0 (y - y0)` since the
+//!   increment started (`P0 = I - n0 n0^T`, `y` the node relative to the tool). Past a slip of a
+//!   few `eps` it is `mu lambda` against the slip, exactly Coulomb's sliding force; below, a
+//!   stiff elastic stick of `mu lambda / eps`.
+
+use super::penalty::ContactSettings;
+use super::rigid_tool::RigidTool;
+use nalgebra::{Matrix3, Vector3};
+
+/// The friction of a node on one tool during an increment: what was lagged at its start.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrictionLag {
+    /// `mu lambda` (N): the Coulomb limit of the tangential force.
+    pub limit: f64,
+    /// Tool normal at the start (unit).
+    pub normal: Vector3<f64>,
+    /// The node's position relative to the tool at the start (mm).
+    pub start: Vector3<f64>,
+}
+
+/// A node's contact with one tool at a trial position: the gradient and Hessian of its
+/// potential with respect to the node's position relative to the tool, and the forces.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PairContact {
+    pub energy: f64,
+    /// `dPi/dy` (N): minus the force of the tool on the node.
+    pub gradient: Vector3<f64>,
+    /// `d^2 Pi / dy^2` (N/mm).
+    pub hessian: Matrix3<f64>,
+    /// `k |g|` (N), zero when not touching.
+    pub normal_force: f64,
+    /// Unit normal of the tool at the node (zero when not touching).
+    pub normal: Vector3<f64>,
+    /// Friction force on the node (N).
+    pub tangential: Vector3<f64>,
+    /// The node lies behind the tool beyond the contact's reach (`max_penetration`): no
+    /// force, but a configuration Newton's method must not step into.
+    pub tunnelled: bool,
+}
+
+/// `s E t0 A / h^2`: the explicit solver's contact spring `s m / dt^2` at the stable step of
+/// an element of size `h` (N/mm).
+pub fn penalty_stiffness(scale: f64, wave_stiffness: f64, area: f64, size: f64) -> f64 {
+    scale * wave_stiffness * area / (size * size)
+}
+
+/// The potential of a node at `y` (relative to the tool's translation) against `tool`, with
+/// contact spring `stiffness` and friction lagged in `friction` (regularised over `slip`, mm).
+/// `engaged`: `Some(true)` holds the spring on even where the node has left the margin (then it
+/// pulls), as Newton's method does when it freezes the contact set to stop a node chattering
+/// in and out of contact; otherwise the gap decides.
+/// `exact`: the Hessian of the normal part by central differences of its gradient, the turn of
+/// the normal over the tool's edges and corners included; otherwise `Pi''(g) n n^T`, its
+/// positive semi-definite part. `None` when the node neither touches the tool nor rubs on it.
+pub fn pair_contact(
+    tool: &RigidTool,
+    y: &Vector3<f64>,
+    stiffness: f64,
+    settings: &ContactSettings,
+    friction: Option<&FrictionLag>,
+    (slip, exact, engaged): (f64, bool, Option<bool>),
+) -> Option<PairContact> {
+    let normal = normal_part(tool, y, stiffness, settings, engaged);
+    let rub = friction.filter(|f| f.limit > 0.0);
+    if normal.is_none() && rub.is_none() {
+        return tunnelled(tool, y, settings).then(|| PairContact {
+            tunnelled: true,
+            ..Default::default()
+        });
+    }
+    let mut pair = PairContact::default();
+    if let Some((energy, gradient, n, force, curvature)) = normal {
+        pair.energy = energy;
+        pair.gradient = gradient;
+        pair.normal = n;
+        pair.normal_force = force;
+        pair.hessian = if exact {
+            normal_hessian_by_differences(tool, y, stiffness, settings)
+        } else {
+            n * n.transpose() * curvature
+        };
+    }
+    if let Some(f) = rub {
+        let projector = Matrix3::identity() - f.normal * f.normal.transpose();
+        let s = projector * (y - f.start);
+        let rho = (s.norm_squared() + slip * slip).sqrt();
+        pair.energy += f.limit * (rho - slip);
+        let g = s * (f.limit / rho);
+        pair.gradient += g;
+        pair.tangential = -g;
+        pair.hessian += projector
+            * (Matrix3::identity() / rho - s * s.transpose() / (rho * rho * rho))
+            * projector
+            * f.limit;
+    }
+    Some(pair)
+}
+
+/// The penalty at a node: energy, gradient, unit normal, normal force, and the potential's
+/// second derivative in the gap.
+type NormalPart = (f64, Vector3<f64>, Vector3<f64>, f64, f64);
+
+/// The [`NormalPart`] at `y`; `None` out of contact. The penalty `1/2 k (g - g_m)^2` while the gap `g` is below the
+/// margin `g_m` ([`contact_margin`]).
+fn normal_part(
+    tool: &RigidTool,
+    y: &Vector3<f64>,
+    stiffness: f64,
+    settings: &ContactSettings,
+    engaged: Option<bool>,
+) -> Option<NormalPart> {
+    let p = tool.nearest(y)?;
+    let (n, distance) = p.direction_to(y);
+    let gap = distance - settings.offset - contact_margin(settings);
+    let open = gap >= 0.0 && engaged != Some(true);
+    if open || gap <= -settings.max_penetration {
+        return None;
+    }
+    let k = stiffness;
+    Some((0.5 * k * gap * gap, n * (k * gap), n, -k * gap, k))
+}
+
+/// Whether the node at `y` lies behind the tool deeper than the contact reaches.
+fn tunnelled(tool: &RigidTool, y: &Vector3<f64>, settings: &ContactSettings) -> bool {
+    tool.nearest(y).is_some_and(|p| {
+        let gap = p.direction_to(y).1 - settings.offset - contact_margin(settings);
+        gap <= -settings.max_penetration
+    })
+}
+
+/// The margin `g_m` by which the contact spring reaches beyond the blank's face: a tenth of
+/// the contact offset **(choice)**. Blank and tools start touching (gap zero); with the spring
+/// already engaged there, Newton's method sees the tool a node is pressed against (a die under
+/// the flange the holder pushes down) instead of no stiffness until the node has passed it. The
+/// price is that the faces rest `g_m` off the tool, 5 % of the ply's thickness.
+pub fn contact_margin(settings: &ContactSettings) -> f64 {
+    0.1 * settings.offset
+}
+
+fn normal_hessian_by_differences(
+    tool: &RigidTool,
+    y: &Vector3<f64>,
+    stiffness: f64,
+    settings: &ContactSettings,
+) -> Matrix3<f64> {
+    let h = 1e-6 * settings.offset.max(1e-3);
+    let gradient = |z: Vector3<f64>| {
+        normal_part(tool, &z, stiffness, settings, None).map_or(Vector3::zeros(), |p| p.1)
+    };
+    let mut hessian = Matrix3::zeros();
+    for d in 0..3 {
+        let mut step = Vector3::zeros();
+        step[d] = h;
+        hessian.set_column(d, &((gradient(y + step) - gradient(y - step)) / (2.0 * h)));
+    }
+    0.5 * (hessian + hessian.transpose())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::contact::{hemisphere_punch, ToolMotion};
+
+    fn punch() -> RigidTool {
+        let surface = hemisphere_punch(20.0, 1.0).unwrap();
+        RigidTool::new("punch", surface, ToolMotion::Fixed, 0.3, 1.0).unwrap()
+    }
+
+    const SETTINGS: ContactSettings = ContactSettings {
+        offset: 0.25,
+        penalty_scale: 0.1,
+        max_penetration: 0.5,
+    };
+
+    /// The gradient is the derivative of the energy and the Hessian that of the gradient,
+    /// friction included, at points touching a faceted cap.
+    #[test]
+    fn gradient_and_hessian_are_the_derivatives_of_the_potential() {
+        let tool = punch();
+        let lag = FrictionLag {
+            limit: 3.0,
+            normal: Vector3::new(0.1, 0.2, 1.0).normalize(),
+            start: Vector3::new(2.0, 1.0, 0.0),
+        };
+        for (k, dir) in [
+            Vector3::new(0.1, 0.2, 1.0),
+            Vector3::new(0.5, -0.3, 0.8),
+            Vector3::new(-0.7, 0.1, 0.7),
+        ]
+        .iter()
+        .enumerate()
+        {
+            let y = Vector3::new(0.0, 0.0, -20.0) + dir.normalize() * 20.1;
+            let at = |z: Vector3<f64>| {
+                pair_contact(&tool, &z, 500.0, &SETTINGS, Some(&lag), (0.01, true, None)).unwrap()
+            };
+            let pair = at(y);
+            assert!(pair.normal_force > 0.0, "{k}: touching");
+            let h = 1e-6;
+            for d in 0..3 {
+                let mut step = Vector3::zeros();
+                step[d] = h;
+                let (plus, minus) = (at(y + step), at(y - step));
+                let slope = (plus.energy - minus.energy) / (2.0 * h);
+                assert!(
+                    (slope - pair.gradient[d]).abs() < 1e-5 * pair.gradient.norm(),
+                    "{k} {d}: {slope} against {}",
+                    pair.gradient[d]
+                );
+                let column = (plus.gradient - minus.gradient) / (2.0 * h);
+                let error = (column - pair.hessian.column(d)).norm();
+                assert!(error < 1e-4 * pair.hessian.norm(), "{k} {d}: {error}");
+            }
+        }
+    }
+
+    /// Past a slip of many `eps`, the friction force is `mu lambda` against the slip.
+    #[test]
+    fn sliding_friction_is_coulombs() {
+        let tool = punch();
+        let lag = FrictionLag {
+            limit: 2.0,
+            normal: Vector3::z(),
+            start: Vector3::new(0.0, 0.0, 0.2),
+        };
+        let y = Vector3::new(1.0, 0.0, 0.2);
+        let pair =
+            pair_contact(&tool, &y, 500.0, &SETTINGS, Some(&lag), (1e-3, false, None)).unwrap();
+        assert!((pair.tangential + Vector3::x() * 2.0).norm() < 2.0 * 1e-6);
+        let stuck = Vector3::new(1e-5, 0.0, 0.2);
+        let pair = pair_contact(
+            &tool,
+            &stuck,
+            500.0,
+            &SETTINGS,
+            Some(&lag),
+            (1e-3, false, None),
+        )
+        .unwrap();
+        assert!(pair.tangential.norm() < 0.02 * 2.0, "sticks below eps");
+    }
+}

@@ -1,0 +1,836 @@
+//! Quasi-static implicit solution of the sheet (docs/solver.md, "Implicit"): no inertia, the
+//! tools and constraints moved at the physical speed in increments of time, each increment
+//! solved by Newton's method on the full nonlinear problem.
+//!
+//! Per increment `t_n -> t_{n+1} = t_n + dt` the unknowns are the node positions and the
+//! travel of the force-driven tools; the residual is the gradient of the incremental potential
+//! `Pi = sum_e A0 w_e + bending + contact + friction + drag - F u`, the viscous matrix taking the
+//! backward-Euler rate `Cdot = (C - C_n) / dt`. The drag `1/2 c |x - x_n|^2` (`c` a small
+//! fraction of the sheet's shear stiffness per node) holds the rigid and zero-stiffness modes of
+//! a sheet that nothing yet supports; its work is booked in [`Energies::damping`] and watched.
+//!
+//! Newton's direction comes from a sparse Cholesky factorisation of the tangent
+//! ([`linear::Cholesky`]); where the consistent tangent is not positive definite (the sheet
+//! buckling, a wrinkle forming), every element's tangent is projected to its positive
+//! semi-definite part ([`assembly::Tangent::Projected`]) and the step is globalised by a
+//! backtracking line search on the residual. An increment that does not converge is cut; one
+//! that converges fast lets the next grow.
+
+pub mod assembly;
+pub mod linear;
+
+use super::energy::Energies;
+use super::explicit::{elastic_energy, Observer, SolverError, State};
+use super::model::{Model, Motion};
+use crate::contact::potential::{penalty_stiffness, FrictionLag};
+use crate::contact::{NodeContact, ToolLoad, ToolMotion};
+use crate::material::MembraneResponse;
+use assembly::{Evaluation, Evaluator, IncrementStart, Layout, Tangent, Trial};
+use linear::Cholesky;
+use nalgebra::{Matrix2, Vector3};
+use std::time::Instant;
+
+/// How to solve.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImplicitSettings {
+    /// Process time to reach (s).
+    pub end_time: f64,
+    /// Time between two records (s); increments end on every record.
+    pub output_interval: f64,
+    /// Largest increment (s); `None`: the output interval.
+    pub max_increment: Option<f64>,
+    /// Residual norm below which an increment has converged, as a fraction of the norm of the
+    /// internal and contact forces.
+    pub tolerance: f64,
+    /// Newton iterations after which an increment is cut.
+    pub max_iterations: usize,
+    /// Drag per node as a fraction of the sheet's in-plane shear stiffness `G t0`.
+    pub stabilisation: f64,
+    /// Slip (mm) over which friction reaches Coulomb's limit.
+    pub friction_slip: f64,
+    /// Contact spring scale `s` of `k = s E t0 A / h^2`.
+    pub penalty_scale: f64,
+    /// Tangents of bending, hourglass and contact by central differences of their exact
+    /// forces (the default), or their Gauss–Newton parts: cheaper per iteration, but on the
+    /// hemisphere the run then stalls at 9 mm of stroke where, differenced, it reaches 25 mm
+    /// (docs/solver.md).
+    pub exact_tangent: bool,
+}
+
+impl ImplicitSettings {
+    /// Defaults for a run to `end_time` recorded every `output_interval`.
+    pub fn new(end_time: f64, output_interval: f64) -> Self {
+        Self {
+            end_time,
+            output_interval,
+            max_increment: None,
+            tolerance: 1e-6,
+            max_iterations: 25,
+            stabilisation: 1e-4,
+            friction_slip: 1e-2,
+            penalty_scale: 0.1,
+            exact_tangent: true,
+        }
+    }
+}
+
+/// Counters and the time split of an implicit run.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ImplicitStatistics {
+    pub increments: usize,
+    pub cut_increments: usize,
+    pub iterations: usize,
+    pub factorisations: usize,
+    /// Iterations that needed the projected tangent.
+    pub projected: usize,
+    /// Wall-clock seconds in assembly (elements, patches, contact), factorisation and solve.
+    pub assembly_seconds: f64,
+    pub solve_seconds: f64,
+}
+
+/// What the run keeps between increments besides the [`State`].
+struct Converged {
+    strains: Vec<Matrix2<f64>>,
+    friction: Vec<Vec<Option<FrictionLag>>>,
+    previous_forces: Vec<Vector3<f64>>,
+    previous_reactions: Vec<Vector3<f64>>,
+    previous_contact: Vec<Vector3<f64>>,
+}
+
+/// Why an increment failed.
+struct NotConverged {
+    residuals: Vec<f64>,
+    worst_nodes: Vec<usize>,
+    reason: String,
+}
+
+/// Solves `model` quasi-statically to `settings.end_time`, reporting to `observer`.
+pub fn run(
+    model: &Model,
+    settings: &ImplicitSettings,
+    observer: &mut dyn Observer,
+) -> Result<(State, ImplicitStatistics), SolverError> {
+    check_settings(settings)?;
+    let layout = layout(model, settings)?;
+    let mut cholesky = Cholesky::analyse(&layout.pattern).map_err(SolverError::Settings)?;
+    let evaluator = Evaluator {
+        model,
+        layout: &layout,
+        exact: settings.exact_tangent,
+        slip: settings.friction_slip,
+    };
+    let mut stats = ImplicitStatistics::default();
+    let mut state = rest_state(model);
+    seat_force_driven_tools(model, &layout, &mut state);
+    let n = model.mesh.nodes.len();
+    let mut converged = Converged {
+        strains: vec![Matrix2::identity(); model.elements.len()],
+        friction: vec![vec![None; model.tools.len()]; n],
+        previous_forces: vec![Vector3::zeros(); n],
+        previous_reactions: vec![Vector3::zeros(); n],
+        previous_contact: vec![Vector3::zeros(); n],
+    };
+    observer
+        .record(model, &state)
+        .map_err(|source| SolverError::Output { time: 0.0, source })?;
+    let max_increment = settings.max_increment.unwrap_or(settings.output_interval);
+    let min_increment = 1e-6 * settings.end_time;
+    let mut dt = 0.25 * max_increment;
+    let mut next_output = settings.output_interval;
+    while state.time < settings.end_time * (1.0 - 1e-12) {
+        if observer.interrupted() {
+            record(model, &mut state, observer)?;
+            return Err(SolverError::Interrupted {
+                step: state.step,
+                time: state.time,
+            });
+        }
+        let to_output = next_output - state.time;
+        let step = dt.min(to_output).min(settings.end_time - state.time);
+        let attempt = increment(
+            &evaluator,
+            &mut cholesky,
+            (&state, &converged),
+            step,
+            settings,
+            &mut stats,
+        );
+        match attempt {
+            Ok((evaluation, positions, translations, iterations)) => {
+                accept(
+                    model,
+                    &layout,
+                    &mut state,
+                    &mut converged,
+                    (evaluation, positions, translations),
+                    step,
+                );
+                stats.increments += 1;
+                state.step = stats.increments;
+                let reached_output = step >= to_output * (1.0 - 1e-9);
+                if reached_output || state.time >= settings.end_time * (1.0 - 1e-12) {
+                    record(model, &mut state, observer)?;
+                    next_output += settings.output_interval;
+                }
+                observer.progress(&state);
+                if iterations <= 6 {
+                    dt = (dt * 1.5).min(max_increment);
+                }
+            }
+            Err(failure) => {
+                stats.cut_increments += 1;
+                dt = 0.25 * step;
+                if dt < min_increment {
+                    record(model, &mut state, observer)?;
+                    return Err(SolverError::NotConverged {
+                        increment: stats.increments + 1,
+                        time: state.time,
+                        increment_time: step,
+                        reason: failure.reason,
+                        residuals: failure.residuals,
+                        worst_nodes: failure.worst_nodes,
+                    });
+                }
+            }
+        }
+    }
+    Ok((state, stats))
+}
+
+/// The residual (every unknown, held ones included) and the consistent tangent (dense, held
+/// rows and columns as the solver has them: identity) of the increment of duration `dt` from
+/// the model at rest to `positions` (tools at `translations`): what the tangent checks compare
+/// with differences of the residual. Friction lagged as given per node and tool.
+pub fn residual_and_tangent(
+    model: &Model,
+    settings: &ImplicitSettings,
+    (positions, translations): (&[Vector3<f64>], &[Vector3<f64>]),
+    dt: f64,
+    friction: &[Vec<Option<FrictionLag>>],
+) -> Result<(Vec<f64>, nalgebra::DMatrix<f64>), SolverError> {
+    let layout = layout(model, settings)?;
+    let evaluator = Evaluator {
+        model,
+        layout: &layout,
+        exact: settings.exact_tangent,
+        slip: settings.friction_slip,
+    };
+    let rest = rest_state(model);
+    let strains = vec![Matrix2::identity(); model.elements.len()];
+    let start = IncrementStart {
+        positions: &rest.positions,
+        strains: &strains,
+        laminate_states: &rest.laminate_states,
+        friction,
+        dt,
+    };
+    let trial = Trial {
+        positions,
+        translations,
+        engaged: None,
+    };
+    let evaluation = evaluator
+        .evaluate(&start, &trial, Tangent::Consistent)
+        .map_err(|(k, e)| SolverError::Settings(format!("element {k}: {e}")))?;
+    let values = evaluation.matrix.expect("tangent asked for");
+    let n = layout.size;
+    let mut dense = nalgebra::DMatrix::zeros(n, n);
+    for j in 0..n {
+        for i in j..n {
+            if let Some(p) = layout.pattern.place(i, j) {
+                dense[(i, j)] = values[p];
+                dense[(j, i)] = values[p];
+            }
+        }
+    }
+    Ok((evaluation.residual, dense))
+}
+
+fn record(
+    model: &Model,
+    state: &mut State,
+    observer: &mut dyn Observer,
+) -> Result<(), SolverError> {
+    state.energies.elastic = elastic_energy(model, state)
+        .map_err(|(element, e)| SolverError::Settings(format!("element {element}: {e}")))?;
+    observer
+        .record(model, state)
+        .map_err(|source| SolverError::Output {
+            time: state.time,
+            source,
+        })
+}
+
+/// The unknowns, pattern, contact springs and drag of `model`.
+fn layout(model: &Model, settings: &ImplicitSettings) -> Result<Layout, SolverError> {
+    let laminate = &model.laminate;
+    let t0 = laminate.reference_thickness();
+    let rest = crate::material::MembraneKinematics {
+        c: Matrix2::identity(),
+        c_dot: Matrix2::zeros(),
+        temperature: model.temperature,
+        fibres: Default::default(),
+    };
+    let wave = laminate
+        .wave_modulus(&rest, &laminate.initial_state())
+        .map_err(|e| SolverError::Settings(e.to_string()))?
+        * t0;
+    let shear = laminate
+        .shear_modulus(model.temperature)
+        .map_err(|e| SolverError::Settings(e.to_string()))?
+        * t0;
+    let n = model.mesh.nodes.len();
+    let mut area = vec![0.0; n];
+    let mut size = vec![f64::INFINITY; n];
+    for e in &model.elements {
+        for &a in e.nodes() {
+            area[a] += e.area / e.nodes().len() as f64;
+            size[a] = size[a].min(e.altitude);
+        }
+    }
+    let penalty = (0..n)
+        .map(|a| penalty_stiffness(settings.penalty_scale, wave, area[a], size[a]))
+        .collect();
+    let drag = (0..n)
+        .map(|a| settings.stabilisation * shear.max(1e-12 * wave) * area[a] / (size[a] * size[a]))
+        .collect();
+    let mean_size = model.elements.iter().map(|e| e.area.sqrt()).sum::<f64>()
+        / model.elements.len().max(1) as f64;
+    let mut layout = Layout::new(model, penalty, drag);
+    layout.force_floor = FORCE_FLOOR * shear.max(1e-12 * wave) * mean_size;
+    Ok(layout)
+}
+
+/// The smallest force scale of the convergence test, as a fraction of `G t0 h` (the force that
+/// shears an element of size `h` by one radian): before anything is loaded the residual is
+/// measured against it, not against forces that are still zero.
+const FORCE_FLOOR: f64 = 1e-3;
+
+/// The model at rest at `t = 0`, with physical masses (they take no part: they are reported).
+fn rest_state(model: &Model) -> State {
+    let n = model.mesh.nodes.len();
+    let thickness = model.laminate.reference_thickness();
+    let mut masses = vec![0.0; n];
+    for e in &model.elements {
+        for &a in e.nodes() {
+            masses[a] += model.density * thickness * e.area / e.nodes().len() as f64;
+        }
+    }
+    State {
+        step: 0,
+        time: 0.0,
+        positions: model.mesh.nodes.clone(),
+        velocities: vec![Vector3::zeros(); n],
+        masses,
+        internal_forces: vec![Vector3::zeros(); n],
+        reactions: vec![Vector3::zeros(); n],
+        membrane: vec![
+            MembraneResponse {
+                n: Matrix2::zeros(),
+                thickness
+            };
+            model.elements.len()
+        ],
+        laminate_states: vec![model.laminate.initial_state(); model.elements.len()],
+        densities: vec![model.density; model.elements.len()],
+        time_step: 0.0,
+        energies: Energies::default(),
+        added_mass: 0.0,
+        tool_translations: vec![Vector3::zeros(); model.tools.len()],
+        tool_velocities: vec![Vector3::zeros(); model.tools.len()],
+        tool_loads: vec![ToolLoad::default(); model.tools.len()],
+        tool_impulses: vec![Vector3::zeros(); model.tools.len()],
+        contacts: vec![NodeContact::default(); n],
+    }
+}
+
+/// Moves each force-driven tool along its force onto the blank, pressed into the contact
+/// springs of the nodes it meets as deep as its force asks: off the blank the tool has nothing
+/// to rest on, and at a gap of exactly zero the springs have no stiffness yet, so Newton's
+/// method would have nothing to converge to.
+fn seat_force_driven_tools(model: &Model, layout: &Layout, state: &mut State) {
+    let offset = model.contact.offset;
+    for (k, tool) in model.tools.iter().enumerate() {
+        let ToolMotion::Force { force, .. } = &tool.motion else {
+            continue;
+        };
+        let axis = force.normalize();
+        for _ in 0..3 {
+            let translation = state.tool_translations[k];
+            let gap = state
+                .positions
+                .iter()
+                .map(|x| tool.gap(&(x - translation), offset))
+                .fold(f64::INFINITY, f64::min);
+            if !gap.is_finite() || gap.abs() < 1e-9 {
+                break;
+            }
+            state.tool_translations[k] += axis * gap;
+        }
+        let translation = state.tool_translations[k];
+        let springs: f64 = state
+            .positions
+            .iter()
+            .zip(&layout.penalty)
+            .filter(|(x, _)| tool.gap(&(*x - translation), offset) < 1e-3 * offset)
+            .map(|(_, k)| k)
+            .sum();
+        if springs > 0.0 {
+            let depth = (force.norm() / springs).min(0.25 * model.contact.max_penetration);
+            state.tool_translations[k] += axis * depth;
+        }
+    }
+}
+
+/// The prescribed position of every node at `t` after an increment `dt` from `positions`, and
+/// each tool's translation; free nodes extrapolated with their last velocity.
+fn predictor(model: &Model, state: &State, dt: f64) -> (Vec<Vector3<f64>>, Vec<Vector3<f64>>) {
+    let t_half = state.time + 0.5 * dt;
+    let mut x: Vec<Vector3<f64>> = state
+        .positions
+        .iter()
+        .zip(&state.velocities)
+        .map(|(x, v)| x + v * dt)
+        .collect();
+    for c in &model.constraints {
+        for &n in &c.nodes {
+            let start = state.positions[n];
+            x[n] = match &c.motion {
+                Motion::Fixed => start,
+                Motion::Velocity(field) => start + field(t_half, &model.mesh.nodes[n]) * dt,
+                Motion::Components(mask) => {
+                    Vector3::from_fn(|d, _| if mask[d] { start[d] } else { x[n][d] })
+                }
+            };
+        }
+    }
+    let translations = model
+        .tools
+        .iter()
+        .enumerate()
+        .map(|(k, tool)| {
+            state.tool_translations[k]
+                + match &tool.motion {
+                    ToolMotion::Fixed => Vector3::zeros(),
+                    ToolMotion::Velocity(v) => v(t_half) * dt,
+                    ToolMotion::Force { .. } => state.tool_velocities[k] * dt,
+                }
+        })
+        .collect();
+    (x, translations)
+}
+
+type Solved = (Evaluation, Vec<Vector3<f64>>, Vec<Vector3<f64>>, usize);
+
+/// Newton's method on one increment of duration `dt`.
+fn increment(
+    evaluator: &Evaluator,
+    cholesky: &mut Cholesky,
+    (state, converged): (&State, &Converged),
+    dt: f64,
+    settings: &ImplicitSettings,
+    stats: &mut ImplicitStatistics,
+) -> Result<Solved, NotConverged> {
+    let model = evaluator.model;
+    let layout = evaluator.layout;
+    let start = IncrementStart {
+        positions: &state.positions,
+        strains: &converged.strains,
+        laminate_states: &state.laminate_states,
+        friction: &converged.friction,
+        dt,
+    };
+    let (mut x, mut translations) = predictor(model, state, dt);
+    let mut z = unknowns(layout, &x, &translations);
+    let mut residuals = Vec::new();
+    let mut projected = false;
+    let fail =
+        |residuals: Vec<f64>, evaluation: Option<&Evaluation>, reason: String| NotConverged {
+            worst_nodes: evaluation.map_or(Vec::new(), |e| worst_nodes(layout, &e.residual)),
+            residuals,
+            reason,
+        };
+    let mut frozen: Option<Vec<Vec<bool>>> = None;
+    let mut freezes = 0;
+    for iteration in 0..settings.max_iterations {
+        stats.iterations += 1;
+        let clock = Instant::now();
+        let tangent = if projected {
+            Tangent::Projected
+        } else {
+            Tangent::Consistent
+        };
+        let engaged = frozen.clone();
+        let trial = Trial {
+            positions: &x,
+            translations: &translations,
+            engaged: engaged.as_deref(),
+        };
+        let evaluation = evaluator
+            .evaluate(&start, &trial, tangent)
+            .map_err(|(k, e)| fail(residuals.clone(), None, format!("element {k}: {e}")))?;
+        stats.assembly_seconds += clock.elapsed().as_secs_f64();
+        let norm = free_norm(layout, &evaluation.residual);
+        residuals.push(norm);
+        let scale = force_scale(layout, &evaluation).max(layout.force_floor);
+        if norm <= settings.tolerance * scale {
+            if frozen.is_none() {
+                return Ok((evaluation, x, translations, iteration + 1));
+            }
+            // solved on the frozen contact set: the solution if the set is the right one
+            let free = Trial {
+                positions: &x,
+                translations: &translations,
+                engaged: None,
+            };
+            let clock = Instant::now();
+            let unfrozen = evaluator
+                .evaluate(&start, &free, Tangent::None)
+                .map_err(|(k, e)| fail(residuals.clone(), None, format!("element {k}: {e}")))?;
+            stats.assembly_seconds += clock.elapsed().as_secs_f64();
+            if free_norm(layout, &unfrozen.residual) <= settings.tolerance * scale {
+                return Ok((unfrozen, x, translations, iteration + 1));
+            }
+            frozen = None;
+            continue;
+        }
+        if frozen.is_none() && iteration + 1 >= FREEZE_AFTER * (freezes + 1) {
+            freezes += 1;
+            frozen = Some(
+                evaluation
+                    .contacts
+                    .iter()
+                    .map(|c| c.normal_force.iter().map(|&f| f != 0.0).collect())
+                    .collect(),
+            );
+        }
+        let clock = Instant::now();
+        let mut values = evaluation.matrix.clone().expect("tangent asked for");
+        let mut factored = cholesky.factorise(&layout.pattern, &values).is_ok();
+        stats.factorisations += 1;
+        if !factored && !projected {
+            stats.solve_seconds += clock.elapsed().as_secs_f64();
+            projected = true;
+            stats.projected += 1;
+            let clock = Instant::now();
+            let again = evaluator
+                .evaluate(&start, &trial, Tangent::Projected)
+                .map_err(|(k, e)| fail(residuals.clone(), None, format!("element {k}: {e}")))?;
+            stats.assembly_seconds += clock.elapsed().as_secs_f64();
+            values = again.matrix.expect("tangent asked for");
+            let clock2 = Instant::now();
+            factored = cholesky.factorise(&layout.pattern, &values).is_ok();
+            stats.factorisations += 1;
+            stats.solve_seconds += clock2.elapsed().as_secs_f64();
+        } else {
+            stats.solve_seconds += clock.elapsed().as_secs_f64();
+        }
+        let clock = Instant::now();
+        let mut shift = 1e-10;
+        while !factored && shift < 1.0 {
+            shift_diagonal(layout, &mut values, shift);
+            factored = cholesky.factorise(&layout.pattern, &values).is_ok();
+            stats.factorisations += 1;
+            shift *= 100.0;
+        }
+        if !factored {
+            return Err(fail(
+                residuals,
+                Some(&evaluation),
+                "the tangent could not be factorised even when shifted".into(),
+            ));
+        }
+        let mut direction: Vec<f64> = evaluation
+            .residual
+            .iter()
+            .zip(&layout.held)
+            .map(|(r, &held)| if held { 0.0 } else { -r })
+            .collect();
+        cholesky.solve(&mut direction);
+        stats.solve_seconds += clock.elapsed().as_secs_f64();
+        // backtracking: a step is taken when it lowers the incremental potential by a share of
+        // its slope (Armijo; on a positive definite tangent the direction always descends) or
+        // the residual norm, whichever first: the potential alone stops deciding near the
+        // solution, where its changes are at its rounding
+        let slope: f64 = direction
+            .iter()
+            .zip(&evaluation.residual)
+            .zip(&layout.held)
+            .filter(|(_, &h)| !h)
+            .map(|((d, r), _)| d * r)
+            .sum();
+        // a force-driven tool moves at most a quarter of the contact's reach per step: its
+        // potential -F u falls without bound once it has passed through the blank
+        let tool_step = layout
+            .tool_unknown
+            .iter()
+            .flatten()
+            .map(|&u| direction[u].abs())
+            .fold(0.0, f64::max);
+        let reach = 0.25 * model.contact.max_penetration;
+        let mut alpha: f64 = if tool_step > reach {
+            reach / tool_step
+        } else {
+            1.0
+        };
+        let mut accepted = false;
+        for _ in 0..LINE_SEARCH_HALVINGS {
+            let candidate: Vec<f64> = z
+                .iter()
+                .zip(&direction)
+                .map(|(z, d)| z + alpha * d)
+                .collect();
+            let (cx, ct) = configuration(layout, &candidate, &x, &translations);
+            let clock = Instant::now();
+            let trial = Trial {
+                positions: &cx,
+                translations: &ct,
+                engaged: frozen.as_deref(),
+            };
+            let probe = evaluator.evaluate(&start, &trial, Tangent::None);
+            stats.assembly_seconds += clock.elapsed().as_secs_f64();
+            if let Ok(probe) = probe {
+                let probe_norm = free_norm(layout, &probe.residual);
+                let lowers_potential = slope < 0.0
+                    && probe.potential <= evaluation.potential + 1e-4 * alpha * slope;
+                let lowers_residual = probe_norm <= (1.0 - 1e-4 * alpha) * norm;
+                let through = probe.tunnelled > evaluation.tunnelled;
+                if probe_norm.is_finite() && !through && (lowers_potential || lowers_residual) {
+                    z = candidate;
+                    x = cx;
+                    translations = ct;
+                    accepted = true;
+                    break;
+                }
+            }
+            alpha *= 0.5;
+        }
+        if !accepted {
+            // at the rounding floor no step lowers the residual: the increment is solved
+            if norm <= ROUNDING_FLOOR * scale {
+                return Ok((evaluation, x, translations, iteration + 1));
+            }
+            if !projected {
+                projected = true;
+                stats.projected += 1;
+                continue;
+            }
+            return Err(fail(
+                residuals,
+                Some(&evaluation),
+                "the line search found no step that lowers the residual".into(),
+            ));
+        }
+    }
+    Err(NotConverged {
+        worst_nodes: Vec::new(),
+        reason: format!("no convergence in {} iterations", settings.max_iterations),
+        residuals,
+    })
+}
+
+/// Halvings of the step the line search tries before it gives up.
+const LINE_SEARCH_HALVINGS: usize = 12;
+
+/// Newton iterations after which the contact set (which node–tool springs act) is frozen for
+/// the rest of the iterations, every so many again: a node whose equilibrium lies at the edge
+/// of contact otherwise hops in and out of it from one iteration to the next and the residual
+/// falls only slowly. Solved on the frozen set, the solution is checked on the free one.
+const FREEZE_AFTER: usize = 5;
+
+/// A residual, relative to the forces at play, that no step lowers is taken as converged below
+/// this: the rounding of sums of forces up to a million times larger than the residual.
+const ROUNDING_FLOOR: f64 = 1e-9;
+
+/// The unknowns of a configuration: node coordinates, then the tools' travel.
+fn unknowns(layout: &Layout, x: &[Vector3<f64>], translations: &[Vector3<f64>]) -> Vec<f64> {
+    let mut z: Vec<f64> = x.iter().flat_map(|p| [p.x, p.y, p.z]).collect();
+    z.resize(layout.size, 0.0);
+    for (k, unknown) in layout.tool_unknown.iter().enumerate() {
+        if let (Some(u), Some((axis, _))) = (unknown, layout.tool_force[k]) {
+            z[*u] = translations[k].dot(&axis);
+        }
+    }
+    z
+}
+
+/// Node positions and tool translations from the unknowns; held coordinates and the other
+/// tools stay where `x` and `translations` have them.
+fn configuration(
+    layout: &Layout,
+    z: &[f64],
+    x: &[Vector3<f64>],
+    translations: &[Vector3<f64>],
+) -> (Vec<Vector3<f64>>, Vec<Vector3<f64>>) {
+    let positions = x
+        .iter()
+        .enumerate()
+        .map(|(n, p)| {
+            Vector3::from_fn(|d, _| {
+                if layout.held[3 * n + d] {
+                    p[d]
+                } else {
+                    z[3 * n + d]
+                }
+            })
+        })
+        .collect();
+    let moved = translations
+        .iter()
+        .enumerate()
+        .map(
+            |(k, t)| match (layout.tool_unknown[k], layout.tool_force[k]) {
+                (Some(u), Some((axis, _))) => t + axis * (z[u] - t.dot(&axis)),
+                _ => *t,
+            },
+        )
+        .collect();
+    (positions, moved)
+}
+
+fn free_norm(layout: &Layout, residual: &[f64]) -> f64 {
+    residual
+        .iter()
+        .zip(&layout.held)
+        .filter(|(_, &h)| !h)
+        .map(|(r, _)| r * r)
+        .sum::<f64>()
+        .sqrt()
+}
+
+/// The size of the forces at play: internal, contact and applied (N).
+fn force_scale(layout: &Layout, e: &Evaluation) -> f64 {
+    let internal: f64 = e.internal.iter().map(|f| f.norm_squared()).sum();
+    let contact: f64 = e.contacts.iter().map(|c| c.force.norm_squared()).sum();
+    let applied: f64 = layout.tool_force.iter().flatten().map(|(_, f)| f * f).sum();
+    (internal + contact + applied).sqrt().max(1e-9)
+}
+
+fn shift_diagonal(layout: &Layout, values: &mut [f64], shift: f64) {
+    let diagonal: Vec<usize> = (0..layout.size)
+        .map(|i| layout.pattern.place(i, i).expect("diagonal"))
+        .collect();
+    let mean = diagonal.iter().map(|&p| values[p].abs()).sum::<f64>() / layout.size as f64;
+    for (i, &p) in diagonal.iter().enumerate() {
+        if !layout.held[i] {
+            values[p] += shift * mean;
+        }
+    }
+}
+
+/// The five nodes with the largest residual force.
+fn worst_nodes(layout: &Layout, residual: &[f64]) -> Vec<usize> {
+    let mut nodes: Vec<(usize, f64)> = (0..layout.nodes)
+        .map(|n| {
+            let r: f64 = (0..3)
+                .filter(|d| !layout.held[3 * n + d])
+                .map(|d| residual[3 * n + d].powi(2))
+                .sum();
+            (n, r)
+        })
+        .collect();
+    nodes.sort_by(|a, b| b.1.total_cmp(&a.1));
+    nodes.into_iter().take(5).map(|(n, _)| n).collect()
+}
+
+/// Takes the converged increment into the state: positions, forces, contact, tools, energies
+/// (trapezoidal work sums as in the explicit solver), and the friction lagged for the next.
+fn accept(
+    model: &Model,
+    layout: &Layout,
+    state: &mut State,
+    converged: &mut Converged,
+    (evaluation, x, translations): (Evaluation, Vec<Vector3<f64>>, Vec<Vector3<f64>>),
+    dt: f64,
+) {
+    let (mut internal, mut external, mut tool) = (0.0, 0.0, 0.0);
+    for (a, x_a) in x.iter().enumerate() {
+        let du = x_a - state.positions[a];
+        let f_int = evaluation.internal[a];
+        let f_contact = evaluation.contacts[a].force;
+        // the support's force along the held directions: the residual there
+        let reaction = Vector3::from_fn(|d, _| {
+            if layout.held[3 * a + d] {
+                evaluation.residual[3 * a + d]
+            } else {
+                0.0
+            }
+        });
+        internal += 0.5 * (converged.previous_forces[a] + f_int).dot(&du);
+        external += 0.5 * (converged.previous_reactions[a] + reaction).dot(&du);
+        tool += 0.5 * (converged.previous_contact[a] + f_contact).dot(&du);
+        converged.previous_forces[a] = f_int;
+        converged.previous_reactions[a] = reaction;
+        converged.previous_contact[a] = f_contact;
+        state.velocities[a] = du / dt;
+        state.reactions[a] = reaction;
+    }
+    for (k, t) in translations.iter().enumerate() {
+        state.tool_velocities[k] = (t - state.tool_translations[k]) / dt;
+        state.tool_impulses[k] += evaluation.loads[k].force * dt;
+    }
+    state.tool_translations = translations;
+    for (k, e) in model.elements.iter().enumerate() {
+        let f = e.gradient(&x);
+        converged.strains[k] = f.transpose() * f;
+    }
+    for (a, contact) in evaluation.contacts.iter().enumerate() {
+        for (k, tool) in model.tools.iter().enumerate() {
+            let normal_force = contact.normal_force.get(k).copied().unwrap_or(0.0);
+            converged.friction[a][k] = (normal_force > 0.0 && tool.friction > 0.0).then(|| {
+                let y = x[a] - state.tool_translations[k];
+                let normal = tool
+                    .nearest(&y)
+                    .map_or(Vector3::z(), |p| p.direction_to(&y).0);
+                FrictionLag {
+                    limit: tool.friction * normal_force,
+                    normal,
+                    start: y,
+                }
+            });
+        }
+    }
+    state.positions = x;
+    state.internal_forces = evaluation.internal;
+    state.membrane = evaluation.responses;
+    state.laminate_states = evaluation.states;
+    state.contacts = evaluation.contacts;
+    state.tool_loads = evaluation.loads;
+    state.time_step = dt;
+    state.time += dt;
+    state.energies.kinetic = 0.0;
+    state.energies.internal_work += internal;
+    state.energies.external_work += external + tool;
+    state.energies.tool_work += tool;
+    state.energies.damping += evaluation.drag_work;
+}
+
+fn check_settings(s: &ImplicitSettings) -> Result<(), SolverError> {
+    let positive = |name: &str, v: f64| {
+        if v.is_finite() && v > 0.0 {
+            Ok(())
+        } else {
+            Err(SolverError::Settings(format!("{name} = {v} must be > 0")))
+        }
+    };
+    positive("end time", s.end_time)?;
+    positive("output interval", s.output_interval)?;
+    positive("tolerance", s.tolerance)?;
+    positive("friction slip", s.friction_slip)?;
+    positive("contact penalty scale", s.penalty_scale)?;
+    if let Some(m) = s.max_increment {
+        positive("largest increment", m)?;
+    }
+    if !(s.stabilisation.is_finite() && s.stabilisation >= 0.0) {
+        return Err(SolverError::Settings(format!(
+            "stabilisation = {} must be >= 0",
+            s.stabilisation
+        )));
+    }
+    if s.max_iterations == 0 {
+        return Err(SolverError::Settings(
+            "the Newton iterations per increment must be at least 1".into(),
+        ));
+    }
+    Ok(())
+}
