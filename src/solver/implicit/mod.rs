@@ -591,8 +591,8 @@ fn increment(
             stats.assembly_seconds += clock.elapsed().as_secs_f64();
             if let Ok(probe) = probe {
                 let probe_norm = free_norm(layout, &probe.residual);
-                let lowers_potential = slope < 0.0
-                    && probe.potential <= evaluation.potential + 1e-4 * alpha * slope;
+                let lowers_potential =
+                    slope < 0.0 && probe.potential <= evaluation.potential + 1e-4 * alpha * slope;
                 let lowers_residual = probe_norm <= (1.0 - 1e-4 * alpha) * norm;
                 let through = probe.tunnelled > evaluation.tunnelled;
                 if probe_norm.is_finite() && !through && (lowers_potential || lowers_residual) {
