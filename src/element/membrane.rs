@@ -258,17 +258,7 @@ impl MembraneElement {
             }
         }
         let f_centre = local.gradient(&corners);
-        for (fibre, factor) in [self.fibres.warp, self.fibres.weft]
-            .iter()
-            .zip(hourglass.yarn_factors)
-        {
-            let k_y = moduli.yarn * factor;
-            let along = f_centre * fibre.xy();
-            let length = along.norm();
-            if k_y == 0.0 || length == 0.0 {
-                continue;
-            }
-            let y = along / length;
+        for (k_y, fibre, y, length) in self.hourglass_yarns(hourglass, &f_centre, moduli) {
             let across = (q - y * y.dot(&q)) / length;
             let d: Vec<Vector3<f64>> = self
                 .shape_gradients
@@ -345,17 +335,7 @@ impl MembraneElement {
             }
         }
         // yarns: 1/2 k_y (y . q)^2, y = F a0 / |F a0|
-        for (fibre, factor) in [self.fibres.warp, self.fibres.weft]
-            .iter()
-            .zip(hourglass.yarn_factors)
-        {
-            let k_y = moduli.yarn * factor;
-            let along = f_centre * fibre.xy();
-            let length = along.norm();
-            if k_y == 0.0 || length == 0.0 {
-                continue;
-            }
-            let y = along / length;
+        for (k_y, fibre, y, length) in self.hourglass_yarns(hourglass, f_centre, moduli) {
             let y_q = y.dot(&q);
             energy += 0.5 * k_y * y_q * y_q;
             if let Some(f) = forces.as_deref_mut() {
@@ -368,6 +348,26 @@ impl MembraneElement {
             }
         }
         energy
+    }
+
+    /// The yarns that hold the hourglass mode: per yarn along the edges, `k_y = E t0 Y_y`, its
+    /// reference direction, its current unit direction `y = F a0 / |F a0|` and `|F a0|`.
+    fn hourglass_yarns(
+        &self,
+        hourglass: &Hourglass,
+        f_centre: &Matrix3x2<f64>,
+        moduli: &HourglassModuli,
+    ) -> Vec<(f64, Vector3<f64>, Vector3<f64>, f64)> {
+        [self.fibres.warp, self.fibres.weft]
+            .into_iter()
+            .zip(hourglass.yarn_factors)
+            .filter_map(|(fibre, factor)| {
+                let k_y = moduli.yarn * factor;
+                let along = f_centre * fibre.xy();
+                let length = along.norm();
+                (k_y != 0.0 && length != 0.0).then(|| (k_y, fibre, along / length, length))
+            })
+            .collect()
     }
 
     /// A tensor given in the local basis (like the membrane resultant `N`) in global

@@ -5,7 +5,7 @@
 //! - yarn tension `W_t(I) = sum_k (A_k / k) (sqrt(I) - 1)^k`, `k = 2..n`, for `sqrt(I) > 1`;
 //!   in compression `W_t = (f A_2 / 2) (sqrt(I) - 1)^2`, a fraction `f` of the initial tensile
 //!   stiffness `A_2`, so that yarns buckle instead of carrying compression; the change of slope
-//!   spread over `|sqrt(I) - 1| < SLACK_BAND`;
+//!   spread over `0 < sqrt(I) - 1 < SLACK_BAND`;
 //! - in-plane shear `W_s(I10) = sum_k c_k I10^k`, `k = 1..m`, `I10 = I8^2 / (I4 I6) = sin^2(gamma)`.
 //!
 //! State variables: none (hyperelastic). The fibre directions come with each point.
@@ -16,12 +16,13 @@ use super::{
 use nalgebra::{Matrix3, Vector3};
 use std::sync::Arc;
 
-/// Half-width of the strain band `|lambda - 1| < SLACK_BAND` over which a yarn's stiffness goes
-/// from slack (`f A_2`) to taut (`A_2`) **(choice)**: a kink there would leave the tangent of
-/// Newton's method undefined where the yarns of a shearing fabric sit, at their rest length
-/// (docs/model.md §3). Outside the band the tension is the law's; inside, it differs from the
-/// kinked law by at most `A_2 SLACK_BAND / 4`.
-pub const SLACK_BAND: f64 = 1e-4;
+/// Width of the strain band `0 < lambda - 1 < SLACK_BAND` over which a yarn's stiffness goes
+/// from slack (`f A_2`) to taut (`A_2`) **(choice)**: a kink at `lambda = 1` would leave the
+/// tangent of Newton's method undefined where the yarns of a shearing fabric sit, at their
+/// rest length (docs/model.md §3). Slack yarns and a yarn at rest are as before (no stress);
+/// past the band the taut tension is the law's less `A_2 SLACK_BAND / 2`, as if the yarn were
+/// longer by half the band (5e-7: 0.05 % of the tension at 0.1 % strain).
+pub const SLACK_BAND: f64 = 1e-6;
 
 /// Tension energy of one yarn family as a function of its stretch.
 #[derive(Clone, Debug, PartialEq)]
@@ -50,9 +51,6 @@ impl YarnTension {
     /// `W_t` as a function of the yarn stretch `lambda = sqrt(I)`.
     pub fn energy(&self, stretch: f64) -> f64 {
         let e = stretch - 1.0;
-        if e <= -SLACK_BAND {
-            return 0.5 * self.compression_stiffness * e * e;
-        }
         let higher: f64 = self
             .coefficients
             .iter()
@@ -67,36 +65,40 @@ impl YarnTension {
     }
 
     /// The energy of the linear part of the tension (`A_2 e` taut, `f A_2 e` slack), its slope
-    /// blended linearly across `|e| < SLACK_BAND`.
+    /// rising linearly from `f A_2` at `e = 0` to `A_2` at `e = SLACK_BAND`, and the taut
+    /// branch beyond shifted by what that takes off it.
     fn linear_part_energy(&self, e: f64) -> f64 {
         let (a2, f_a2) = (self.initial_stiffness(), self.compression_stiffness);
-        let d = SLACK_BAND;
-        if e <= -d {
+        let b = SLACK_BAND;
+        if e <= 0.0 {
             return 0.5 * f_a2 * e * e;
         }
-        let s = (e + d).min(2.0 * d);
-        let band = 0.5 * f_a2 * d * d - f_a2 * d * s
-            + 0.5 * f_a2 * s * s
-            + (a2 - f_a2) * s * s * s / (12.0 * d);
-        if e <= d {
+        let s = e.min(b);
+        let band = 0.5 * f_a2 * s * s + (a2 - f_a2) * s * s * s / (6.0 * b);
+        if e <= b {
             band
         } else {
-            // past the band, the taut energy shifted by what the blend changed at its edge
-            band + 0.5 * a2 * (e * e - d * d)
+            band + 0.5 * a2 * (e * e - b * b) - self.taut_shift() * (e - b)
         }
     }
 
     /// The linear part of the tension, see [`Self::linear_part_energy`].
     fn linear_part_tension(&self, e: f64) -> f64 {
         let (a2, f_a2) = (self.initial_stiffness(), self.compression_stiffness);
-        let d = SLACK_BAND;
-        if e <= -d {
+        let b = SLACK_BAND;
+        if e <= 0.0 {
             f_a2 * e
-        } else if e >= d {
-            a2 * e
+        } else if e >= b {
+            a2 * e - self.taut_shift()
         } else {
-            -f_a2 * d + f_a2 * (e + d) + (a2 - f_a2) * (e + d) * (e + d) / (4.0 * d)
+            f_a2 * e + (a2 - f_a2) * e * e / (2.0 * b)
         }
+    }
+
+    /// What the band takes off the taut tension, `(A_2 - f A_2) SLACK_BAND / 2` (MPa): the
+    /// yarn's rest length as if longer by half the band.
+    fn taut_shift(&self) -> f64 {
+        0.5 * (self.initial_stiffness() - self.compression_stiffness) * SLACK_BAND
     }
 
     fn initial_stiffness(&self) -> f64 {
@@ -307,5 +309,37 @@ impl MaterialLaw for WovenFabric {
         Ok(self.warp.energy(inv.i4.sqrt())
             + self.weft.energy(inv.i6.sqrt())
             + self.shear.energy(inv.i10()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The blended slack-to-taut band: tension is the energy's derivative, zero at rest, the
+    /// slack law below it, the taut law shifted by `(A_2 - f A_2) b / 2` past it, and its
+    /// slope goes from `f A_2` to `A_2` across it.
+    #[test]
+    fn the_slack_band_is_smooth_and_leaves_rest_and_slack_alone() {
+        let yarn = YarnTension::new(vec![4.0e4, 2.0e6], 1e-3);
+        let b = SLACK_BAND;
+        for e in [-3.0 * b, -0.5 * b, 0.0, 0.3 * b, b, 2.0 * b, 0.01] {
+            let l = 1.0 + e;
+            let h = 1e-3 * b;
+            let slope = (yarn.energy(l + h) - yarn.energy(l - h)) / (2.0 * h);
+            let scale = 1.0 + yarn.tension(l).abs();
+            assert!((slope - yarn.tension(l)).abs() < 1e-6 * scale, "{e}");
+        }
+        assert_eq!(yarn.tension(1.0), 0.0);
+        assert_eq!(yarn.energy(1.0), 0.0);
+        assert!((yarn.tension(1.0 - 2.0 * b) + 40.0 * 2.0 * b).abs() < 1e-12);
+        let shift = 0.5 * (4.0e4 - 40.0) * b;
+        let taut = 4.0e4 * 2.0 * b + 2.0e6 * 4.0 * b * b - shift;
+        assert!((yarn.tension(1.0 + 2.0 * b) - taut).abs() < 1e-9);
+        let stiffness =
+            |e: f64| (yarn.tension(1.0 + e + 1e-9) - yarn.tension(1.0 + e - 1e-9)) / 2e-9;
+        assert!((stiffness(0.001 * b) - 40.0).abs() < 0.01 * 4.0e4);
+        assert!((stiffness(0.5 * b) - (0.5 * (4.0e4 + 40.0) + 2.0e6 * b)).abs() < 1e-3 * 4.0e4);
+        assert!((stiffness(0.999 * b) - 4.0e4).abs() < 0.01 * 4.0e4);
     }
 }

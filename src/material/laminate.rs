@@ -111,9 +111,10 @@ impl BackwardEulerStep {
     }
 }
 
-/// Step in the Green strain of the central differences of [`Laminate::step_tangent`]: the
-/// difference's truncation (`h^2`) and rounding (`1e-16 / h`) errors both near `1e-10`.
-const TANGENT_STEP: f64 = 1e-6;
+/// Step in the Green strain of the central differences of [`Laminate::step_tangent`]: well
+/// inside the yarns' slack band (`fabric::SLACK_BAND`, 1e-6), so that a difference does not
+/// straddle it; the plane-stress solve's tolerance (1e-12 of the stress) over `h` sets its error, 1e-5.
+const TANGENT_STEP: f64 = 1e-7;
 
 /// The laminate's state variables at one point: per layer, `lambda3` and `dlambda3/dt`.
 #[derive(Clone, Debug, PartialEq)]
@@ -418,15 +419,9 @@ impl Laminate {
         state: &LaminateState,
         dt: f64,
     ) -> Result<f64, MaterialError> {
-        self.layers
-            .iter()
-            .enumerate()
-            .try_fold(0.0, |sum, (k, layer)| {
-                let point =
-                    kin.layer_point(state.thickness_stretch[k], state.thickness_stretch_rate[k]);
-                let viscous = layer.law.viscous_potential(&point)?;
-                Ok(sum + layer.thickness * (layer.law.strain_energy(&point)? + dt * viscous))
-            })
+        self.layer_sum(kin, state, |law, point| {
+            Ok(law.strain_energy(point)? + dt * law.viscous_potential(point)?)
+        })
     }
 
     /// Stored energy per unit reference area, `sum_k t_k W_k` (N/mm), in an advanced state.
@@ -435,13 +430,23 @@ impl Laminate {
         kin: &MembraneKinematics,
         state: &LaminateState,
     ) -> Result<f64, MaterialError> {
+        self.layer_sum(kin, state, |law, point| law.strain_energy(point))
+    }
+
+    /// `sum_k t_k f(law_k, point_k)` over every layer in an advanced state.
+    fn layer_sum(
+        &self,
+        kin: &MembraneKinematics,
+        state: &LaminateState,
+        f: impl Fn(&dyn MaterialLaw, &PointKinematics) -> Result<f64, MaterialError>,
+    ) -> Result<f64, MaterialError> {
         self.layers
             .iter()
             .enumerate()
             .try_fold(0.0, |sum, (k, layer)| {
                 let point =
                     kin.layer_point(state.thickness_stretch[k], state.thickness_stretch_rate[k]);
-                Ok(sum + layer.thickness * layer.law.strain_energy(&point)?)
+                Ok(sum + layer.thickness * f(layer.law.as_ref(), &point)?)
             })
     }
 

@@ -684,7 +684,20 @@ impl State {
                 masses[n] += share;
             }
         }
-        Ok(State {
+        Ok(State::undeformed(model, masses, densities, added_mass))
+    }
+
+    /// The undeformed model at rest at `t = 0`, with these lumped masses and element densities
+    /// (mass scaling `added_mass` included): the start of either solver.
+    pub(crate) fn undeformed(
+        model: &Model,
+        masses: Vec<f64>,
+        densities: Vec<f64>,
+        added_mass: f64,
+    ) -> State {
+        let n_nodes = model.mesh.nodes.len();
+        let thickness = model.laminate.reference_thickness();
+        State {
             step: 0,
             time: 0.0,
             positions: model.mesh.nodes.clone(),
@@ -699,7 +712,7 @@ impl State {
                 };
                 model.elements.len()
             ],
-            laminate_states: vec![laminate.initial_state(); model.elements.len()],
+            laminate_states: vec![model.laminate.initial_state(); model.elements.len()],
             densities,
             time_step: 0.0,
             energies: Energies::default(),
@@ -709,7 +722,7 @@ impl State {
             tool_loads: vec![ToolLoad::default(); model.tools.len()],
             tool_impulses: vec![Vector3::zeros(); model.tools.len()],
             contacts: vec![NodeContact::default(); n_nodes],
-        })
+        }
     }
 }
 

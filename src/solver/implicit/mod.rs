@@ -19,12 +19,10 @@
 pub mod assembly;
 pub mod linear;
 
-use super::energy::Energies;
 use super::explicit::{elastic_energy, Observer, SolverError, State};
 use super::model::{Model, Motion};
 use crate::contact::potential::{penalty_stiffness, FrictionLag};
-use crate::contact::{NodeContact, ToolLoad, ToolMotion};
-use crate::material::MembraneResponse;
+use crate::contact::ToolMotion;
 use assembly::{Evaluation, Evaluator, IncrementStart, Layout, Tangent, Trial};
 use linear::Cholesky;
 use nalgebra::{Matrix2, Vector3};
@@ -316,32 +314,12 @@ fn rest_state(model: &Model) -> State {
             masses[a] += model.density * thickness * e.area / e.nodes().len() as f64;
         }
     }
-    State {
-        step: 0,
-        time: 0.0,
-        positions: model.mesh.nodes.clone(),
-        velocities: vec![Vector3::zeros(); n],
+    State::undeformed(
+        model,
         masses,
-        internal_forces: vec![Vector3::zeros(); n],
-        reactions: vec![Vector3::zeros(); n],
-        membrane: vec![
-            MembraneResponse {
-                n: Matrix2::zeros(),
-                thickness
-            };
-            model.elements.len()
-        ],
-        laminate_states: vec![model.laminate.initial_state(); model.elements.len()],
-        densities: vec![model.density; model.elements.len()],
-        time_step: 0.0,
-        energies: Energies::default(),
-        added_mass: 0.0,
-        tool_translations: vec![Vector3::zeros(); model.tools.len()],
-        tool_velocities: vec![Vector3::zeros(); model.tools.len()],
-        tool_loads: vec![ToolLoad::default(); model.tools.len()],
-        tool_impulses: vec![Vector3::zeros(); model.tools.len()],
-        contacts: vec![NodeContact::default(); n],
-    }
+        vec![model.density; model.elements.len()],
+        0.0,
+    )
 }
 
 /// Moves each force-driven tool along its force onto the blank, pressed into the contact
