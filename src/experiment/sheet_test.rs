@@ -487,7 +487,7 @@ pub fn run_sheet_test(
     let bounds = checks::force_bound(model).and_then(|force| {
         checks::carried_kinetic_energy(model, settings, speed).map(|work| (force, work))
     });
-    let mut statistics = None;
+    let mut statistics = ImplicitStatistics::default();
     let (outcome, checks) = match bounds {
         Ok((force_bound, loaded_work)) => {
             let check = CheckSettings {
@@ -502,10 +502,7 @@ pub fn run_sheet_test(
                     let implicit =
                         ImplicitSettings::new(settings.end_time, settings.output_interval);
                     checks::watched(model, check, &mut recorder, |observer| {
-                        implicit::run(model, &implicit, observer).map(|(state, s)| {
-                            statistics = Some(s);
-                            state
-                        })
+                        implicit::run(model, &implicit, observer, &mut statistics)
                     })
                 }
             }
@@ -542,7 +539,7 @@ pub fn run_sheet_test(
             worst_kinetic_ratio,
             wall_seconds,
             threads: rayon::current_num_threads(),
-            implicit: statistics,
+            implicit: (solver == SolverKind::Implicit).then_some(statistics),
         },
         records: recorder.records,
         outcome,

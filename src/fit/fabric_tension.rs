@@ -26,7 +26,7 @@ use crate::io::InputError;
 use nalgebra::{DMatrix, DVector};
 
 /// `N(lambda) = t_B sum_k A_k (lambda - 1)^(k-1)` (N/mm) for `lambda > 1`, docs/model.md §3/§5
-/// (the law's slack band, a shift of `A_2 1e-6 / 2`, left out);
+/// (the law's slack band, a shift of `A_2 1e-4 / 2`, left out);
 /// `coefficients` are `A_2, A_3, ...` (MPa), `thickness` is `t_B` (mm).
 pub fn strip_force_per_width(thickness: f64, coefficients: &[f64], stretch: f64) -> f64 {
     let e = stretch - 1.0;

@@ -130,7 +130,7 @@ pub fn run(
         last_impulse: None,
         stopping: false,
     };
-    let mut statistics = None;
+    let mut statistics = ImplicitStatistics::default();
     let (outcome, checks) = match check_settings(forming) {
         Ok(check) => match forming.solver {
             SolverKind::Explicit => {
@@ -142,10 +142,7 @@ pub fn run(
                     forming.settings.output_interval,
                 );
                 checks::watched(&forming.model, check, &mut recorder, |observer| {
-                    implicit::run(&forming.model, &settings, observer).map(|(state, s)| {
-                        statistics = Some(s);
-                        state
-                    })
+                    implicit::run(&forming.model, &settings, observer, &mut statistics)
                 })
             }
         },
@@ -161,7 +158,7 @@ pub fn run(
         steps,
         wall_seconds: start.elapsed().as_secs_f64(),
         checks,
-        implicit: statistics,
+        implicit: (forming.solver == SolverKind::Implicit).then_some(statistics),
     }
 }
 

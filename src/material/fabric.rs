@@ -21,8 +21,8 @@ use std::sync::Arc;
 /// tangent of Newton's method undefined where the yarns of a shearing fabric sit, at their
 /// rest length (docs/model.md §3). Slack yarns and a yarn at rest are as before (no stress);
 /// past the band the taut tension is the law's less `A_2 SLACK_BAND / 2`, as if the yarn were
-/// longer by half the band (5e-7: 0.05 % of the tension at 0.1 % strain).
-pub const SLACK_BAND: f64 = 1e-6;
+/// longer by half the band (5e-5: 2.5 % of the tension at 0.2 % strain, 0.5 % at 1 %).
+pub const SLACK_BAND: f64 = 1e-4;
 
 /// Tension energy of one yarn family as a function of its stretch.
 #[derive(Clone, Debug, PartialEq)]

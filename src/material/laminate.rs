@@ -112,9 +112,10 @@ impl BackwardEulerStep {
 }
 
 /// Step in the Green strain of the central differences of [`Laminate::step_tangent`]: well
-/// inside the yarns' slack band (`fabric::SLACK_BAND`, 1e-6), so that a difference does not
-/// straddle it; the plane-stress solve's tolerance (1e-12 of the stress) over `h` sets its error, 1e-5.
-const TANGENT_STEP: f64 = 1e-7;
+/// inside the yarns' slack band (`fabric::SLACK_BAND`, 1e-4), so that a difference does not
+/// straddle it; the plane-stress solve's tolerance (1e-12 of the stress) over `h` sets its
+/// error, 1e-6.
+const TANGENT_STEP: f64 = 1e-6;
 
 /// The laminate's state variables at one point: per layer, `lambda3` and `dlambda3/dt`.
 #[derive(Clone, Debug, PartialEq)]
