@@ -202,8 +202,11 @@ fn exact_slope_finds_the_stretch_of_the_differenced_slope() {
             stretch < 1e-14,
             "dt {dt}, speed {speed}: lambda3 differs by {stretch:e}"
         );
+        // the yarns' slack band (docs/model.md §3) bends the tension's slope a thousandfold
+        // within 1e-4 of strain: the two roots of the thickness solve, each within its
+        // tolerance, give resultants up to 5e-9 apart (measured)
         assert!(
-            resultant < 1e-10,
+            resultant < 1e-8,
             "dt {dt}, speed {speed}: N differs by {resultant:e}"
         );
     }
