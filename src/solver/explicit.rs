@@ -474,14 +474,18 @@ fn fastest_element(model: &Model, state: &State) -> usize {
         .unwrap_or(0)
 }
 
+/// `Ok` for a finite positive setting `v`, else a settings error naming it: either solver's
+/// checks.
+pub(crate) fn positive_setting(name: &str, v: f64) -> Result<(), SolverError> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(SolverError::Settings(format!("{name} = {v} must be > 0")))
+    }
+}
+
 fn check_settings(s: &SolverSettings) -> Result<(), SolverError> {
-    let positive = |name: &str, v: f64| {
-        if v.is_finite() && v > 0.0 {
-            Ok(())
-        } else {
-            Err(SolverError::Settings(format!("{name} = {v} must be > 0")))
-        }
-    };
+    let positive = positive_setting;
     positive("end time", s.end_time)?;
     positive("output interval", s.output_interval)?;
     positive("time-step safety factor", s.time_step_safety)?;

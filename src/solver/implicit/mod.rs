@@ -19,7 +19,7 @@
 pub mod assembly;
 pub mod linear;
 
-use super::explicit::{elastic_energy, Observer, SolverError, State};
+use super::explicit::{elastic_energy, positive_setting, Observer, SolverError, State};
 use super::model::{Model, Motion};
 use crate::contact::potential::{penalty_stiffness, FrictionLag};
 use crate::contact::ToolMotion;
@@ -785,13 +785,7 @@ fn accept(
 }
 
 fn check_settings(s: &ImplicitSettings) -> Result<(), SolverError> {
-    let positive = |name: &str, v: f64| {
-        if v.is_finite() && v > 0.0 {
-            Ok(())
-        } else {
-            Err(SolverError::Settings(format!("{name} = {v} must be > 0")))
-        }
-    };
+    let positive = positive_setting;
     positive("end time", s.end_time)?;
     positive("output interval", s.output_interval)?;
     positive("tolerance", s.tolerance)?;
