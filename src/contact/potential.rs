@@ -43,8 +43,9 @@ pub struct PairContact {
     pub normal: Vector3<f64>,
     /// Friction force on the node (N).
     pub tangential: Vector3<f64>,
-    /// The node lies behind the tool beyond the contact's reach (`max_penetration`): no
-    /// force, but a configuration Newton's method must not step into.
+    /// The node lies behind the tool beyond the contact's reach (`max_penetration`). The
+    /// spring still pushes it back (a cut-off would make the potential jump there, and a step
+    /// through it would be a descent), but an increment may not end so.
     pub tunnelled: bool,
 }
 
@@ -73,12 +74,12 @@ pub fn pair_contact(
     let normal = normal_part(tool, y, stiffness, settings, engaged);
     let rub = friction.filter(|f| f.limit > 0.0);
     if normal.is_none() && rub.is_none() {
-        return tunnelled(tool, y, settings).then(|| PairContact {
-            tunnelled: true,
-            ..Default::default()
-        });
+        return None;
     }
-    let mut pair = PairContact::default();
+    let mut pair = PairContact {
+        tunnelled: tunnelled(tool, y, settings),
+        ..Default::default()
+    };
     if let Some((energy, gradient, n, force, curvature)) = normal {
         pair.energy = energy;
         pair.gradient = gradient;
@@ -122,8 +123,7 @@ fn normal_part(
     let p = tool.nearest(y)?;
     let (n, distance) = p.direction_to(y);
     let gap = distance - settings.offset - contact_margin(settings);
-    let open = gap >= 0.0 && engaged != Some(true);
-    if open || gap <= -settings.max_penetration {
+    if gap >= 0.0 && engaged != Some(true) {
         return None;
     }
     let k = stiffness;
@@ -221,6 +221,26 @@ mod tests {
                 let error = (column - pair.hessian.column(d)).norm();
                 assert!(error < 1e-4 * pair.hessian.norm(), "{k} {d}: {error}");
             }
+        }
+    }
+
+    /// Deeper than the contact's reach the spring goes on pushing, `k |g - g_m|` along the
+    /// normal, and the pair says it has tunnelled; within the reach it does not.
+    #[test]
+    fn the_spring_holds_beyond_the_reach_and_says_so() {
+        let tool = punch();
+        let k = 500.0;
+        let margin = contact_margin(&SETTINGS);
+        for depth in [0.1, 0.4, 0.6, 0.9] {
+            // the cap's top at z = 0 is a vertex of the faceted surface; 0.3 mm off it
+            let y = Vector3::new(0.3, 0.0, SETTINGS.offset - depth);
+            let p = tool.nearest(&y).unwrap();
+            let (n, distance) = p.direction_to(&y);
+            let gap = distance - SETTINGS.offset - margin;
+            let pair = pair_contact(&tool, &y, k, &SETTINGS, None, (0.01, false, None)).unwrap();
+            assert!((pair.normal_force + k * gap).abs() < 1e-9, "{depth}");
+            assert!((pair.gradient - n * (k * gap)).norm() < 1e-9, "{depth}");
+            assert_eq!(pair.tunnelled, gap <= -SETTINGS.max_penetration, "{depth}");
         }
     }
 

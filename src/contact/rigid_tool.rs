@@ -209,8 +209,12 @@ impl RigidTool {
     /// Signed gap of a blank face to the surface, for output: the signed distance of `p` (in the
     /// tool's frame) to the nearest point of the whole surface (`Projection::direction_to`),
     /// less `offset`.
-    /// A full search, for frames, not for every step.
+    /// Within the search radius the grid lists every triangle that can be the nearest; beyond
+    /// it, a full search (for frames and checks, not for every step).
     pub fn gap(&self, p: &Vector3<f64>, offset: f64) -> f64 {
+        if let Some(near) = self.nearest(p) {
+            return near.direction_to(p).1 - offset;
+        }
         // a triangle whose bounding sphere is farther than the best so far cannot be nearer
         let mut best: Option<(usize, Vector3<f64>, f64)> = None;
         for (k, (centre, radius)) in self.spheres.iter().enumerate() {
@@ -359,6 +363,43 @@ mod tests {
             }
         }
         assert!(touching > 1000 && touching < 4000, "{touching}");
+    }
+
+    /// The gap, by the grid near the surface and by the pruned search beyond it, is that of
+    /// the nearest of all triangles, on points inside the search radius and far outside it.
+    #[test]
+    fn gap_is_that_of_the_nearest_of_all_triangles() {
+        let punch = crate::contact::hemisphere_punch(10.0, 1.0).unwrap();
+        let tool = RigidTool::new("punch", punch, ToolMotion::Fixed, 0.1, 0.3).unwrap();
+        for i in 0..600 {
+            let s = i as f64 * 0.37;
+            let r = 10.0 + 3.0 * (s / 5.0).sin();
+            let p = Vector3::new(0.0, 0.0, -10.0)
+                + Vector3::new(
+                    (s / 90.0).sin() * (s / 7.0).cos(),
+                    (s / 90.0).sin() * (s / 7.0).sin(),
+                    (s / 90.0).cos(),
+                ) * r;
+            let nearest = (0..tool.surface.triangles.len())
+                .map(|k| (k, tool.closest_on(k, &p)))
+                .min_by(|a, b| {
+                    (p - a.1)
+                        .norm_squared()
+                        .total_cmp(&(p - b.1).norm_squared())
+                })
+                .unwrap();
+            let exhaustive = Projection {
+                triangle: nearest.0,
+                point: nearest.1,
+                normal: tool.surface.normal(nearest.0),
+            }
+            .direction_to(&p)
+            .1;
+            assert!(
+                (tool.gap(&p, 0.0) - exhaustive).abs() < 1e-12,
+                "point {i}: {p:?}"
+            );
+        }
     }
 
     #[test]

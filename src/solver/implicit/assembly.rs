@@ -176,8 +176,9 @@ pub struct Evaluator<'a> {
     /// Tangents of bending, hourglass and contact by central differences of their forces,
     /// instead of their Gauss–Newton parts (which the projected tangent always takes).
     pub exact: bool,
-    /// Regularising slip of friction (mm).
-    pub slip: f64,
+    /// Regularising sliding speed of friction (mm/s): the slip `eps` of an increment is it
+    /// times the increment's duration.
+    pub slip_rate: f64,
 }
 
 /// One bending patch's forces on its nodes, its stiffness when asked for, and its energy.
@@ -410,7 +411,11 @@ impl Evaluator<'_> {
                             layout.penalty[n],
                             &model.contact,
                             start.friction[n][k].as_ref(),
-                            (self.slip, exact, trial.engaged.map(|e| e[n][k])),
+                            (
+                                self.slip_rate * start.dt,
+                                exact,
+                                trial.engaged.map(|e| e[n][k]),
+                            ),
                         )
                     })
                     .collect()
@@ -427,10 +432,7 @@ impl Evaluator<'_> {
             contact.near = vec![Default::default(); tools];
             for (k, pair) in node_pairs.iter().enumerate() {
                 let Some(pair) = pair else { continue };
-                if pair.tunnelled {
-                    tunnelled += 1;
-                    continue;
-                }
+                tunnelled += usize::from(pair.tunnelled);
                 energy += pair.energy;
                 let force = -pair.gradient;
                 contact.force += force;

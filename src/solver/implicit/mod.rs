@@ -44,8 +44,10 @@ pub struct ImplicitSettings {
     pub max_iterations: usize,
     /// Drag per node as a fraction of the sheet's in-plane shear stiffness `G t0`.
     pub stabilisation: f64,
-    /// Slip (mm) over which friction reaches Coulomb's limit.
-    pub friction_slip: f64,
+    /// Sliding speed (mm/s) at which friction reaches Coulomb's limit: over an increment `dt`
+    /// the regularising slip is `friction_slip_rate * dt`, so that the friction force depends
+    /// on how fast a node slides, not on how long the increment is.
+    pub friction_slip_rate: f64,
     /// Contact spring scale `s` of `k = s E t0 A / h^2`.
     pub penalty_scale: f64,
     /// Tangents of bending, hourglass and contact by central differences of their exact
@@ -62,10 +64,10 @@ impl ImplicitSettings {
             end_time,
             output_interval,
             max_increment: None,
-            tolerance: 1e-6,
+            tolerance: 1e-4,
             max_iterations: 25,
             stabilisation: 1e-4,
-            friction_slip: 1e-2,
+            friction_slip_rate: 0.1,
             penalty_scale: 0.1,
             exact_tangent: true,
         }
@@ -117,7 +119,7 @@ pub fn run(
         model,
         layout: &layout,
         exact: settings.exact_tangent,
-        slip: settings.friction_slip,
+        slip_rate: settings.friction_slip_rate,
     };
     let mut state = rest_state(model);
     seat_force_driven_tools(model, &layout, &mut state);
@@ -212,7 +214,7 @@ pub fn residual_and_tangent(
         model,
         layout: &layout,
         exact: settings.exact_tangent,
-        slip: settings.friction_slip,
+        slip_rate: settings.friction_slip_rate,
     };
     let rest = rest_state(model);
     let strains = vec![Matrix2::identity(); model.elements.len()];
@@ -401,7 +403,11 @@ fn predictor(model: &Model, state: &State, dt: f64) -> (Vec<Vector3<f64>>, Vec<V
 
 type Solved = (Evaluation, Vec<Vector3<f64>>, Vec<Vector3<f64>>, usize);
 
-/// Newton's method on one increment of duration `dt`.
+/// One increment of duration `dt`: Newton's method with friction lagged at the increment's
+/// start, then again with the normal forces of its end while they differ from the lagged ones
+/// by more than [`FRICTION_LAG_CHANGE`] (at most [`FRICTION_PASSES`] times): a node that
+/// comes into contact during the increment would otherwise slide it without friction, and the
+/// friction force would lag the stroke by an increment.
 fn increment(
     evaluator: &Evaluator,
     cholesky: &mut Cholesky,
@@ -410,16 +416,97 @@ fn increment(
     settings: &ImplicitSettings,
     stats: &mut ImplicitStatistics,
 ) -> Result<Solved, NotConverged> {
+    let mut lags = converged.friction.clone();
+    let mut guess = predictor(evaluator.model, state, dt);
+    let mut iterations = 0;
+    for pass in 0..=FRICTION_PASSES {
+        let start = IncrementStart {
+            positions: &state.positions,
+            strains: &converged.strains,
+            laminate_states: &state.laminate_states,
+            friction: &lags,
+            dt,
+        };
+        let (evaluation, x, translations, taken) =
+            newton(evaluator, cholesky, &start, guess, settings, stats)?;
+        iterations += taken;
+        let refined = (pass < FRICTION_PASSES)
+            .then(|| {
+                refined_lags(
+                    evaluator.model,
+                    state,
+                    &lags,
+                    &evaluation,
+                    &x,
+                    &translations,
+                )
+            })
+            .flatten();
+        match refined {
+            Some(better) => {
+                lags = better;
+                guess = (x, translations);
+            }
+            None => return Ok((evaluation, x, translations, iterations)),
+        }
+    }
+    unreachable!("the last pass returns")
+}
+
+/// Friction lagged again with the normal forces at the end of the increment, when they differ
+/// from the lagged ones by more than [`FRICTION_LAG_CHANGE`] of their sum; the slip still
+/// counts from the increment's start, along the start's tangent plane where there was one.
+fn refined_lags(
+    model: &Model,
+    state: &State,
+    lags: &[Vec<Option<FrictionLag>>],
+    evaluation: &Evaluation,
+    x: &[Vector3<f64>],
+    translations: &[Vector3<f64>],
+) -> Option<Vec<Vec<Option<FrictionLag>>>> {
+    let mut change = 0.0;
+    let mut total = 0.0;
+    let mut refined = lags.to_vec();
+    for (a, contact) in evaluation.contacts.iter().enumerate() {
+        for (k, tool) in model.tools.iter().enumerate() {
+            if tool.friction <= 0.0 {
+                continue;
+            }
+            let limit = tool.friction * contact.normal_force.get(k).copied().unwrap_or(0.0);
+            let lagged = lags[a][k].map_or(0.0, |l| l.limit);
+            change += (limit - lagged).abs();
+            total += limit;
+            refined[a][k] = (limit > 0.0).then(|| match lags[a][k] {
+                Some(lag) => FrictionLag { limit, ..lag },
+                None => {
+                    let y = x[a] - translations[k];
+                    FrictionLag {
+                        limit,
+                        normal: tool
+                            .nearest(&y)
+                            .map_or(Vector3::z(), |p| p.direction_to(&y).0),
+                        start: state.positions[a] - state.tool_translations[k],
+                    }
+                }
+            });
+        }
+    }
+    (change > FRICTION_LAG_CHANGE * total).then_some(refined)
+}
+
+/// Newton's method on one increment from `start`, beginning at `guess` (positions and tool
+/// translations).
+fn newton(
+    evaluator: &Evaluator,
+    cholesky: &mut Cholesky,
+    start: &IncrementStart,
+    guess: (Vec<Vector3<f64>>, Vec<Vector3<f64>>),
+    settings: &ImplicitSettings,
+    stats: &mut ImplicitStatistics,
+) -> Result<Solved, NotConverged> {
     let model = evaluator.model;
     let layout = evaluator.layout;
-    let start = IncrementStart {
-        positions: &state.positions,
-        strains: &converged.strains,
-        laminate_states: &state.laminate_states,
-        friction: &converged.friction,
-        dt,
-    };
-    let (mut x, mut translations) = predictor(model, state, dt);
+    let (mut x, mut translations) = guess;
     let mut z = unknowns(layout, &x, &translations);
     let mut residuals = Vec::new();
     let mut projected = false;
@@ -431,6 +518,7 @@ fn increment(
         };
     let mut frozen: Option<Vec<Vec<bool>>> = None;
     let mut freezes = 0;
+    let mut worst = Vec::new();
     for iteration in 0..settings.max_iterations {
         stats.iterations += 1;
         let clock = Instant::now();
@@ -446,13 +534,24 @@ fn increment(
             engaged: engaged.as_deref(),
         };
         let evaluation = evaluator
-            .evaluate(&start, &trial, tangent)
+            .evaluate(start, &trial, tangent)
             .map_err(|(k, e)| fail(residuals.clone(), None, format!("element {k}: {e}")))?;
         stats.assembly_seconds += clock.elapsed().as_secs_f64();
         let norm = free_norm(layout, &evaluation.residual);
         residuals.push(norm);
+        worst = worst_nodes(layout, &evaluation.residual);
         let scale = force_scale(layout, &evaluation).max(layout.force_floor);
         if norm <= settings.tolerance * scale {
+            if evaluation.tunnelled > 0 {
+                return Err(fail(
+                    residuals,
+                    Some(&evaluation),
+                    format!(
+                        "{} nodes came to rest behind a tool beyond the contact's reach",
+                        evaluation.tunnelled
+                    ),
+                ));
+            }
             if frozen.is_none() {
                 return Ok((evaluation, x, translations, iteration + 1));
             }
@@ -464,7 +563,7 @@ fn increment(
             };
             let clock = Instant::now();
             let unfrozen = evaluator
-                .evaluate(&start, &free, Tangent::None)
+                .evaluate(start, &free, Tangent::None)
                 .map_err(|(k, e)| fail(residuals.clone(), None, format!("element {k}: {e}")))?;
             stats.assembly_seconds += clock.elapsed().as_secs_f64();
             if free_norm(layout, &unfrozen.residual) <= settings.tolerance * scale {
@@ -472,6 +571,15 @@ fn increment(
             }
             frozen = None;
             continue;
+        }
+        if stalls(&residuals) {
+            return Err(fail(
+                residuals,
+                Some(&evaluation),
+                format!(
+                    "the residual fell by less than half over the last {STALL_WINDOW} iterations"
+                ),
+            ));
         }
         if frozen.is_none() && iteration + 1 >= FREEZE_AFTER * (freezes + 1) {
             freezes += 1;
@@ -493,7 +601,7 @@ fn increment(
             stats.projected += 1;
             let clock = Instant::now();
             let again = evaluator
-                .evaluate(&start, &trial, Tangent::Projected)
+                .evaluate(start, &trial, Tangent::Projected)
                 .map_err(|(k, e)| fail(residuals.clone(), None, format!("element {k}: {e}")))?;
             stats.assembly_seconds += clock.elapsed().as_secs_f64();
             values = again.matrix.expect("tangent asked for");
@@ -552,6 +660,8 @@ fn increment(
         } else {
             1.0
         };
+        let potential_decides =
+            -slope > POTENTIAL_ROUNDING * evaluation.potential.abs().max(f64::MIN_POSITIVE);
         let mut accepted = false;
         for _ in 0..LINE_SEARCH_HALVINGS {
             let candidate: Vec<f64> = z
@@ -566,15 +676,19 @@ fn increment(
                 translations: &ct,
                 engaged: frozen.as_deref(),
             };
-            let probe = evaluator.evaluate(&start, &trial, Tangent::None);
+            let probe = evaluator.evaluate(start, &trial, Tangent::None);
             stats.assembly_seconds += clock.elapsed().as_secs_f64();
             if let Ok(probe) = probe {
                 let probe_norm = free_norm(layout, &probe.residual);
                 let lowers_potential =
                     slope < 0.0 && probe.potential <= evaluation.potential + 1e-4 * alpha * slope;
                 let lowers_residual = probe_norm <= (1.0 - 1e-4 * alpha) * norm;
-                let through = probe.tunnelled > evaluation.tunnelled;
-                if probe_norm.is_finite() && !through && (lowers_potential || lowers_residual) {
+                let lowers = if potential_decides {
+                    lowers_potential
+                } else {
+                    lowers_residual
+                };
+                if probe_norm.is_finite() && lowers {
                     z = candidate;
                     x = cx;
                     translations = ct;
@@ -602,11 +716,34 @@ fn increment(
         }
     }
     Err(NotConverged {
-        worst_nodes: Vec::new(),
+        worst_nodes: worst,
         reason: format!("no convergence in {} iterations", settings.max_iterations),
         residuals,
     })
 }
+
+/// Newton passes of an increment with friction lagged again at its end, at most.
+const FRICTION_PASSES: usize = 2;
+
+/// Change of the friction limits `mu lambda`, relative to their sum, above which an increment
+/// is solved again with them lagged at its end.
+const FRICTION_LAG_CHANGE: f64 = 0.002;
+
+/// Iterations over which the residual must at least halve once the increment is this many
+/// iterations old: slower, the increment is cut at once rather than after its last
+/// iteration, as the shorter one converges in fewer iterations than the slow one would take.
+const STALL_WINDOW: usize = 5;
+const STALL_AFTER: usize = 10;
+
+fn stalls(residuals: &[f64]) -> bool {
+    let n = residuals.len();
+    n >= STALL_AFTER && residuals[n - 1] > 0.5 * residuals[n - 1 - STALL_WINDOW]
+}
+
+/// The expected change of the potential, relative to the potential, below which the line
+/// search judges a step by the residual instead: `Pi` sums terms whose rounding (about 1e-16
+/// of each) then hides the change of the sum.
+const POTENTIAL_ROUNDING: f64 = 1e-10;
 
 /// Halvings of the step the line search tries before it gives up.
 const LINE_SEARCH_HALVINGS: usize = 12;
@@ -789,7 +926,7 @@ fn check_settings(s: &ImplicitSettings) -> Result<(), SolverError> {
     positive("end time", s.end_time)?;
     positive("output interval", s.output_interval)?;
     positive("tolerance", s.tolerance)?;
-    positive("friction slip", s.friction_slip)?;
+    positive("friction slip rate", s.friction_slip_rate)?;
     positive("contact penalty scale", s.penalty_scale)?;
     if let Some(m) = s.max_increment {
         positive("largest increment", m)?;
