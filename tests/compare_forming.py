@@ -10,8 +10,8 @@ line each:
   shear angle (cell data `shear_angle_deg`) in the last frame of each forming.pvd;
 - `punch_force_end`, `punch_force_peak`: the relative difference of the punch force at the
   end of the stroke and of its peak (forming.csv), and `punch_force_curve`: the largest
-  difference along the stroke, the other run interpolated at the reference's strokes past
-  a fifth of the stroke, over the reference's peak;
+  relative difference along the stroke where the reference's force is above a tenth of its
+  peak, the other run interpolated at the reference's strokes;
 - `draw_in_mm`: the difference of the edge's draw-in at the end of the stroke.
 
 Only the Python standard library: the .vtu frames are decoded as thermostamp writes them
@@ -80,11 +80,11 @@ def main():
     print(f"punch_force_peak {pa:.3f} {pb:.3f} {(pb - pa) / pa:+.4f}")
     worst = 0.0
     for r in ra:
-        if r["stroke"] < 0.2 * end_a["stroke"]:
+        if r["punch_force"] <= 0.1 * pa:
             continue
         f = interpolate(rb, r["stroke"], "punch_force")
         if f is not None:
-            worst = max(worst, abs(f - r["punch_force"]) / pa)
+            worst = max(worst, abs(f - r["punch_force"]) / r["punch_force"])
     print(f"punch_force_curve {worst:.4f}")
     da, db = end_a["draw_in"], end_b["draw_in"]
     print(f"draw_in_mm {da:.3f} {db:.3f} {db - da:+.3f}")

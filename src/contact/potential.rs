@@ -15,6 +15,7 @@
 
 use super::penalty::ContactSettings;
 use super::rigid_tool::RigidTool;
+use super::surface::Projection;
 use nalgebra::{Matrix3, Vector3};
 
 /// The friction of a node on one tool during an increment: what was lagged at its start.
@@ -71,22 +72,23 @@ pub fn pair_contact(
     friction: Option<&FrictionLag>,
     (slip, exact, engaged): (f64, bool, Option<bool>),
 ) -> Option<PairContact> {
-    let normal = normal_part(tool, y, stiffness, settings, engaged);
+    let nearest = tool.nearest(y);
+    let normal = nearest.and_then(|p| normal_part(p, y, stiffness, settings, engaged));
     let rub = friction.filter(|f| f.limit > 0.0);
     if normal.is_none() && rub.is_none() {
         return None;
     }
     let mut pair = PairContact {
-        tunnelled: tunnelled(tool, y, settings),
+        tunnelled: nearest.is_some_and(|p| tunnelled(p, y, settings)),
         ..Default::default()
     };
-    if let Some((energy, gradient, n, force, curvature)) = normal {
+    if let (Some((energy, gradient, n, force, curvature)), Some(p)) = (normal, nearest) {
         pair.energy = energy;
         pair.gradient = gradient;
         pair.normal = n;
         pair.normal_force = force;
         pair.hessian = if exact {
-            normal_hessian_by_differences(tool, y, stiffness, settings)
+            normal_hessian_by_differences(tool, p.triangle, y, stiffness, settings)
         } else {
             n * n.transpose() * curvature
         };
@@ -111,16 +113,16 @@ pub fn pair_contact(
 /// second derivative in the gap.
 type NormalPart = (f64, Vector3<f64>, Vector3<f64>, f64, f64);
 
-/// The [`NormalPart`] at `y`; `None` out of contact. The penalty `1/2 k (g - g_m)^2` while the gap `g` is below the
+/// The [`NormalPart`] at `y` of the spring to `p`, the point of the tool nearest to `y`;
+/// `None` out of contact. The penalty `1/2 k (g - g_m)^2` while the gap `g` is below the
 /// margin `g_m` ([`contact_margin`]).
 fn normal_part(
-    tool: &RigidTool,
+    p: Projection,
     y: &Vector3<f64>,
     stiffness: f64,
     settings: &ContactSettings,
     engaged: Option<bool>,
 ) -> Option<NormalPart> {
-    let p = tool.nearest(y)?;
     let (n, distance) = p.direction_to(y);
     let gap = distance - settings.offset - contact_margin(settings);
     if gap >= 0.0 && engaged != Some(true) {
@@ -131,11 +133,9 @@ fn normal_part(
 }
 
 /// Whether the node at `y` lies behind the tool deeper than the contact reaches.
-fn tunnelled(tool: &RigidTool, y: &Vector3<f64>, settings: &ContactSettings) -> bool {
-    tool.nearest(y).is_some_and(|p| {
-        let gap = p.direction_to(y).1 - settings.offset - contact_margin(settings);
-        gap <= -settings.max_penetration
-    })
+fn tunnelled(p: Projection, y: &Vector3<f64>, settings: &ContactSettings) -> bool {
+    let gap = p.direction_to(y).1 - settings.offset - contact_margin(settings);
+    gap <= -settings.max_penetration
 }
 
 /// The margin `g_m` by which the contact spring reaches beyond the blank's face: a tenth of
@@ -147,15 +147,21 @@ pub fn contact_margin(settings: &ContactSettings) -> f64 {
     0.1 * settings.offset
 }
 
+/// Central differences of the spring's gradient around `y`, on the triangle nearest to `y`:
+/// within the step (a millionth of the offset) the nearest point stays on it but where `y` is
+/// that close to being as near another, and a search of the tool per difference would cost
+/// six more than the force itself.
 fn normal_hessian_by_differences(
     tool: &RigidTool,
+    triangle: usize,
     y: &Vector3<f64>,
     stiffness: f64,
     settings: &ContactSettings,
 ) -> Matrix3<f64> {
     let h = 1e-6 * settings.offset.max(1e-3);
     let gradient = |z: Vector3<f64>| {
-        normal_part(tool, &z, stiffness, settings, None).map_or(Vector3::zeros(), |p| p.1)
+        normal_part(tool.project_on(triangle, &z), &z, stiffness, settings, None)
+            .map_or(Vector3::zeros(), |p| p.1)
     };
     let mut hessian = Matrix3::zeros();
     for d in 0..3 {

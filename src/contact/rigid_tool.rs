@@ -183,6 +183,16 @@ impl RigidTool {
             })
     }
 
+    /// The nearest point of triangle `k` alone to `p`: [`Self::nearest`] once the triangle is
+    /// known, for derivatives by differences near a point already projected.
+    pub fn project_on(&self, k: usize, p: &Vector3<f64>) -> Projection {
+        Projection {
+            triangle: k,
+            point: self.closest_on(k, p),
+            normal: self.surface.normal(k),
+        }
+    }
+
     fn closest_on(&self, k: usize, p: &Vector3<f64>) -> Vector3<f64> {
         let [a, b, c] = self.surface.triangles[k].map(|i| self.surface.vertices[i]);
         closest_point_on_triangle(p, &a, &b, &c)

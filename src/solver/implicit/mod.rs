@@ -138,9 +138,12 @@ pub fn run(
     let min_increment = 1e-6 * settings.end_time;
     let mut dt = 0.25 * max_increment;
     let mut next_output = settings.output_interval;
+    let mut recorded = 0.0;
     while state.time < settings.end_time * (1.0 - 1e-12) {
         if observer.interrupted() {
-            record(model, &mut state, observer)?;
+            if state.time > recorded {
+                record(model, &mut state, observer)?;
+            }
             return Err(SolverError::Interrupted {
                 step: state.step,
                 time: state.time,
@@ -171,6 +174,7 @@ pub fn run(
                 let reached_output = step >= to_output * (1.0 - 1e-9);
                 if reached_output || state.time >= settings.end_time * (1.0 - 1e-12) {
                     record(model, &mut state, observer)?;
+                    recorded = state.time;
                     next_output += settings.output_interval;
                 }
                 observer.progress(&state);
@@ -182,7 +186,10 @@ pub fn run(
                 stats.cut_increments += 1;
                 dt = 0.25 * step;
                 if dt < min_increment {
-                    record(model, &mut state, observer)?;
+                    // what was converged since the last record; nothing new if it is at hand
+                    if state.time > recorded {
+                        record(model, &mut state, observer)?;
+                    }
                     return Err(SolverError::NotConverged {
                         increment: stats.increments + 1,
                         time: state.time,
@@ -263,7 +270,7 @@ fn record(
 }
 
 /// The unknowns, pattern, contact springs and drag of `model`.
-fn layout(model: &Model, settings: &ImplicitSettings) -> Result<Layout, SolverError> {
+pub fn layout(model: &Model, settings: &ImplicitSettings) -> Result<Layout, SolverError> {
     let laminate = &model.laminate;
     let t0 = laminate.reference_thickness();
     let rest = crate::material::MembraneKinematics {
@@ -883,7 +890,10 @@ fn accept(
     }
     for (k, t) in translations.iter().enumerate() {
         state.tool_velocities[k] = (t - state.tool_translations[k]) / dt;
-        state.tool_impulses[k] += evaluation.loads[k].force * dt;
+        // trapezoidal, as the force is known at the increment's ends only: the end value alone
+        // would read a rising force high by half its rise over the increment
+        let force = 0.5 * (state.tool_loads[k].force + evaluation.loads[k].force);
+        state.tool_impulses[k] += force * dt;
     }
     state.tool_translations = translations;
     for (k, e) in model.elements.iter().enumerate() {
