@@ -35,7 +35,7 @@ struct Cli {
 enum Command {
     /// Drive one material point through a deformation history and print its stress as CSV.
     MaterialPoint(material_point::Args),
-    /// Virtual material tests of a sheet, run with the explicit solver.
+    /// Virtual material tests of a sheet, run with the explicit solver or (`--solver implicit`) the implicit one.
     #[command(subcommand)]
     Test(virtual_test::TestCommand),
     /// A thermo-stamping run described by a scenario file (blank, tools, process).

@@ -39,6 +39,9 @@ pub struct Layout {
     /// Force below which a residual is converged whatever the forces at play (N), set by the
     /// solver.
     pub force_floor: f64,
+    /// The mean element size (mm), the scale of a Newton correction at the rounding of the
+    /// positions; set by the solver.
+    pub length_scale: f64,
     /// Where the stored entries of each node pair of the pattern start, see [`Layout::place`].
     element_nodes: Vec<Vec<usize>>,
     patch_nodes: Vec<Vec<usize>>,
@@ -109,6 +112,7 @@ impl Layout {
             drag,
             tool_drag,
             force_floor: 0.0,
+            length_scale: 0.0,
             element_nodes,
             patch_nodes,
         }

@@ -306,6 +306,7 @@ pub fn layout(model: &Model, settings: &ImplicitSettings) -> Result<Layout, Solv
         / model.elements.len().max(1) as f64;
     let mut layout = Layout::new(model, penalty, drag);
     layout.force_floor = FORCE_FLOOR * shear.max(1e-12 * wave) * mean_size;
+    layout.length_scale = mean_size;
     Ok(layout)
 }
 
@@ -707,7 +708,15 @@ fn newton(
         }
         if !accepted {
             // at the rounding floor no step lowers the residual: the increment is solved
-            if norm <= ROUNDING_FLOOR * scale {
+            let correction = direction
+                .iter()
+                .zip(&layout.held)
+                .filter(|(_, &h)| !h)
+                .map(|(d, _)| d.abs())
+                .fold(0.0, f64::max);
+            if norm <= ROUNDING_FLOOR * scale
+                || correction <= CORRECTION_FLOOR * layout.length_scale
+            {
                 return Ok((evaluation, x, translations, iteration + 1));
             }
             if !projected {
@@ -764,6 +773,12 @@ const FREEZE_AFTER: usize = 5;
 /// A residual, relative to the forces at play, that no step lowers is taken as converged below
 /// this: the rounding of sums of forces up to a million times larger than the residual.
 const ROUNDING_FLOOR: f64 = 1e-9;
+
+/// A Newton correction, relative to the mean element size, at the rounding of the positions:
+/// where no step lowers the residual and the full step would move no unknown farther, the
+/// residual is what the forces' rounding leaves (stiff yarns over a slack sheet, forces of
+/// 1e-6 N at the start of a virtual test) and the increment is solved.
+const CORRECTION_FLOOR: f64 = 1e-9;
 
 /// The unknowns of a configuration: node coordinates, then the tools' travel.
 fn unknowns(layout: &Layout, x: &[Vector3<f64>], translations: &[Vector3<f64>]) -> Vec<f64> {
