@@ -10,7 +10,7 @@ use nalgebra::{DMatrix, DVector, Vector3};
 use thermostamp::contact::potential::FrictionLag;
 use thermostamp::experiment::bias_extension::BiasExtension;
 use thermostamp::experiment::picture_frame::{PictureFrame, PictureFrameRow};
-use thermostamp::experiment::sheet_test::{SheetTest, TestProcess};
+use thermostamp::experiment::sheet_test::{SheetTest, SheetTestRun, TestProcess};
 use thermostamp::experiment::uniaxial::{UniaxialRow, UniaxialTension};
 use thermostamp::forming::{FormingModel, Scenario};
 use thermostamp::material::MaterialCard;
@@ -237,14 +237,7 @@ fn bias_extension_matches_the_explicit_solver() {
     test.process.end_displacement = 15.0;
     test.process.history_points = 5;
     let explicit = test.run(&card.laminate, card.density, None, None).unwrap();
-    let implicit = on_implicit(&test, |t| &mut t.process)
-        .run(&card.laminate, card.density, None, None)
-        .unwrap();
-    assert!(
-        implicit.run.outcome.is_ok(),
-        "{:?}",
-        implicit.run.outcome.err()
-    );
+    let implicit = finished(&on_implicit(&test, |t| &mut t.process));
     assert_eq!(explicit.run.records.len(), implicit.run.records.len());
     for (e, i) in explicit.run.records.iter().zip(&implicit.run.records) {
         let (e, i) = (e.reading, i.reading);
@@ -257,6 +250,14 @@ fn bias_extension_matches_the_explicit_solver() {
             assert!((i.shear_angle - e.shear_angle).abs() < 0.3, "{e:?} {i:?}");
         }
     }
+}
+
+/// `test` run on the T300/PPS card, which must reach its end.
+fn finished<T: SheetTest>(test: &T) -> SheetTestRun<T::Row> {
+    let card = t300_card();
+    let result = test.run(&card.laminate, card.density, None, None).unwrap();
+    assert!(result.run.outcome.is_ok(), "{:?}", result.run.outcome.err());
+    result
 }
 
 /// `test` on the implicit solver at the physical speed: no time or mass scaling.
@@ -278,21 +279,8 @@ fn against_explicit<T: SheetTest + Clone>(
     process: impl Fn(&mut T) -> &mut TestProcess,
     reading: impl Fn(&T::Row) -> (f64, f64, f64),
 ) -> (f64, f64) {
-    let card = t300_card();
-    let explicit = test.run(&card.laminate, card.density, None, None).unwrap();
-    assert!(
-        explicit.run.outcome.is_ok(),
-        "{:?}",
-        explicit.run.outcome.err()
-    );
-    let implicit = on_implicit(test, process)
-        .run(&card.laminate, card.density, None, None)
-        .unwrap();
-    assert!(
-        implicit.run.outcome.is_ok(),
-        "{:?}",
-        implicit.run.outcome.err()
-    );
+    let explicit = finished(test);
+    let implicit = finished(&on_implicit(test, process));
     assert_eq!(explicit.rows.len(), implicit.rows.len());
     let last = reading(explicit.rows.last().unwrap()).1;
     explicit

@@ -22,7 +22,7 @@ pub mod linear;
 use super::explicit::{elastic_energy, positive_setting, Observer, SolverError, State};
 use super::model::{Model, Motion};
 use crate::contact::potential::{penalty_stiffness, FrictionLag};
-use crate::contact::ToolMotion;
+use crate::contact::{RigidTool, ToolMotion};
 use assembly::{Evaluation, Evaluator, IncrementStart, Layout, Tangent, Trial};
 use linear::Cholesky;
 use nalgebra::{Matrix2, Vector3};
@@ -427,7 +427,8 @@ fn increment(
     let mut lags = converged.friction.clone();
     let mut guess = predictor(evaluator.model, state, dt);
     let mut iterations = 0;
-    for pass in 0..=FRICTION_PASSES {
+    let mut passes = 0;
+    loop {
         let start = IncrementStart {
             positions: &state.positions,
             strains: &converged.strains,
@@ -438,7 +439,8 @@ fn increment(
         let (evaluation, x, translations, taken) =
             newton(evaluator, cholesky, &start, guess, settings, stats)?;
         iterations += taken;
-        let refined = (pass < FRICTION_PASSES)
+        passes += 1;
+        let refined = (passes <= FRICTION_PASSES)
             .then(|| {
                 refined_lags(
                     evaluator.model,
@@ -458,7 +460,6 @@ fn increment(
             None => return Ok((evaluation, x, translations, iterations)),
         }
     }
-    unreachable!("the last pass returns")
 }
 
 /// Friction lagged again with the normal forces at the end of the increment, when they differ
@@ -486,20 +487,21 @@ fn refined_lags(
             total += limit;
             refined[a][k] = (limit > 0.0).then(|| match lags[a][k] {
                 Some(lag) => FrictionLag { limit, ..lag },
-                None => {
-                    let y = x[a] - translations[k];
-                    FrictionLag {
-                        limit,
-                        normal: tool
-                            .nearest(&y)
-                            .map_or(Vector3::z(), |p| p.direction_to(&y).0),
-                        start: state.positions[a] - state.tool_translations[k],
-                    }
-                }
+                None => FrictionLag {
+                    limit,
+                    normal: lag_normal(tool, &(x[a] - translations[k])),
+                    start: state.positions[a] - state.tool_translations[k],
+                },
             });
         }
     }
     (change > FRICTION_LAG_CHANGE * total).then_some(refined)
+}
+
+/// The tool's normal at a node at `y` (relative to the tool) that friction is lagged with.
+fn lag_normal(tool: &RigidTool, y: &Vector3<f64>) -> Vector3<f64> {
+    tool.nearest(y)
+        .map_or(Vector3::z(), |p| p.direction_to(y).0)
 }
 
 /// Newton's method on one increment from `start`, beginning at `guess` (positions and tool
@@ -547,7 +549,9 @@ fn newton(
         stats.assembly_seconds += clock.elapsed().as_secs_f64();
         let norm = free_norm(layout, &evaluation.residual);
         residuals.push(norm);
-        worst = worst_nodes(layout, &evaluation.residual);
+        if iteration + 1 == settings.max_iterations {
+            worst = worst_nodes(layout, &evaluation.residual);
+        }
         let scale = force_scale(layout, &evaluation).max(layout.force_floor);
         if norm <= settings.tolerance * scale {
             if evaluation.tunnelled > 0 {
@@ -920,12 +924,9 @@ fn accept(
             let normal_force = contact.normal_force.get(k).copied().unwrap_or(0.0);
             converged.friction[a][k] = (normal_force > 0.0 && tool.friction > 0.0).then(|| {
                 let y = x[a] - state.tool_translations[k];
-                let normal = tool
-                    .nearest(&y)
-                    .map_or(Vector3::z(), |p| p.direction_to(&y).0);
                 FrictionLag {
                     limit: tool.friction * normal_force,
-                    normal,
+                    normal: lag_normal(tool, &y),
                     start: y,
                 }
             });
