@@ -4,7 +4,7 @@ use crate::experiment::material_point::{
     drive_laminate, drive_layer, LaminateResponse, MembraneSample, PointFailure, PointResponse,
     PointSample,
 };
-use crate::io::{read_csv_table, write_csv, CsvTable, InputError};
+use crate::io::{check_finite_row, read_csv_table, write_csv, CsvTable, InputError};
 use crate::material::{FibreDirections, MaterialCard, MaterialLaw};
 use anyhow::Context;
 use clap::ValueEnum;
@@ -87,7 +87,24 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             )
         }
     };
+    check_response(args, header, &rows)?;
     write_output(args.output.as_ref(), header, &rows)
+}
+
+/// A response that is not a finite number comes from the card (a value the law cannot take,
+/// such as 1e308 for a thickness) driven through the history: the error names both, as the
+/// writer alone would name only a cell of an output nobody asked to read.
+fn check_response(args: &Args, header: &[&str], rows: &[Vec<f64>]) -> anyhow::Result<()> {
+    for (i, row) in rows.iter().enumerate() {
+        check_finite_row(header, i + 1, row).map_err(|e| {
+            anyhow::anyhow!(
+                "{}: driven through {}, the response is not a finite number (output {e})",
+                args.card.display(),
+                args.history.display()
+            )
+        })?;
+    }
+    Ok(())
 }
 
 fn write_output(path: Option<&PathBuf>, header: &[&str], rows: &[Vec<f64>]) -> anyhow::Result<()> {

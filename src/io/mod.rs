@@ -7,7 +7,7 @@ pub mod sheet_frame;
 pub mod vtk;
 pub mod xy_curve;
 
-pub use csv_table::{read_csv_table, write_csv, CsvStream, CsvTable, WriteError};
+pub use csv_table::{check_finite_row, read_csv_table, write_csv, CsvStream, CsvTable, WriteError};
 
 /// Bad input, located in its file: `origin: line N: message`.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
