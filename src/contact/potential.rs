@@ -15,7 +15,7 @@
 
 use super::penalty::ContactSettings;
 use super::rigid_tool::RigidTool;
-use super::surface::Projection;
+use super::surface::{Feature, Projection};
 use nalgebra::{Matrix3, Vector3};
 
 /// The friction of a node on one tool during an increment: what was lagged at its start.
@@ -61,9 +61,9 @@ pub fn penalty_stiffness(scale: f64, wave_stiffness: f64, area: f64, size: f64) 
 /// `engaged`: `Some(true)` holds the spring on even where the node has left the margin (then it
 /// pulls), as Newton's method does when it freezes the contact set to stop a node chattering
 /// in and out of contact; otherwise the gap decides.
-/// `exact`: the Hessian of the normal part by central differences of its gradient, the turn of
-/// the normal over the tool's edges and corners included; otherwise `Pi''(g) n n^T`, its
-/// positive semi-definite part. `None` when the node neither touches the tool nor rubs on it.
+/// `exact`: the Hessian of the normal part with the turn of the normal over the tool's edges
+/// and corners ([`normal_hessian`]); otherwise `Pi''(g) n n^T`, its positive semi-definite
+/// part. `None` when the node neither touches the tool nor rubs on it.
 pub fn pair_contact(
     tool: &RigidTool,
     y: &Vector3<f64>,
@@ -88,7 +88,7 @@ pub fn pair_contact(
         pair.normal = n;
         pair.normal_force = force;
         pair.hessian = if exact {
-            normal_hessian_by_differences(tool, p.triangle, y, stiffness, settings)
+            normal_hessian(tool, p, y, stiffness, settings)
         } else {
             n * n.transpose() * curvature
         };
@@ -147,29 +147,32 @@ pub fn contact_margin(settings: &ContactSettings) -> f64 {
     0.1 * settings.offset
 }
 
-/// Central differences of the spring's gradient around `y`, on the triangle nearest to `y`:
-/// within the step (a millionth of the offset) the nearest point stays on it but where `y` is
-/// that close to being as near another, and a search of the tool per difference would cost
-/// six more than the force itself.
-fn normal_hessian_by_differences(
+/// `d^2/dy^2` of the spring `1/2 k (g - g_m)^2` to `p`, the point of the tool nearest to `y`:
+/// `k n n^T + k (g - g_m) dn/dy`. In front of a face the normal is the face's and does not
+/// turn; in front of an edge or a corner it is `(y - p) / |y - p|`, which turns as `y` moves
+/// across the edge (`(I - n n^T - t t^T) / |y - p|`, `t` along the edge) or in any direction
+/// about the corner (`(I - n n^T) / |y - p|`); behind the tool it is the face's.
+fn normal_hessian(
     tool: &RigidTool,
-    triangle: usize,
+    p: Projection,
     y: &Vector3<f64>,
     stiffness: f64,
     settings: &ContactSettings,
 ) -> Matrix3<f64> {
-    let h = 1e-6 * settings.offset.max(1e-3);
-    let gradient = |z: Vector3<f64>| {
-        normal_part(tool.project_on(triangle, &z), &z, stiffness, settings, None)
-            .map_or(Vector3::zeros(), |p| p.1)
-    };
-    let mut hessian = Matrix3::zeros();
-    for d in 0..3 {
-        let mut step = Vector3::zeros();
-        step[d] = h;
-        hessian.set_column(d, &((gradient(y + step) - gradient(y - step)) / (2.0 * h)));
+    let (n, distance) = p.direction_to(y);
+    let k = stiffness;
+    let spring = n * n.transpose() * k;
+    let in_front = (y - p.point).dot(&p.normal) > 0.0 && distance > 0.0;
+    if !in_front {
+        return spring;
     }
-    0.5 * (hessian + hessian.transpose())
+    let turn = match tool.feature_on(p.triangle, y) {
+        Feature::Face => return spring,
+        Feature::Edge(t) => Matrix3::identity() - n * n.transpose() - t * t.transpose(),
+        Feature::Vertex => Matrix3::identity() - n * n.transpose(),
+    };
+    let gap = distance - settings.offset - contact_margin(settings);
+    spring + turn * (k * gap / distance)
 }
 
 #[cfg(test)]
@@ -198,15 +201,19 @@ mod tests {
             normal: Vector3::new(0.1, 0.2, 1.0).normalize(),
             start: Vector3::new(2.0, 1.0, 0.0),
         };
-        for (k, dir) in [
-            Vector3::new(0.1, 0.2, 1.0),
-            Vector3::new(0.5, -0.3, 0.8),
-            Vector3::new(-0.7, 0.1, 0.7),
-        ]
-        .iter()
-        .enumerate()
-        {
-            let y = Vector3::new(0.0, 0.0, -20.0) + dir.normalize() * 20.1;
+        // in front of a face, of an edge and of a corner of the faceted cap (centre z = -20)
+        let [a, b, c] = tool.surface.triangles[0].map(|i| tool.surface.vertices[i]);
+        let centre = Vector3::new(0.0, 0.0, -20.0);
+        let off = |q: Vector3<f64>| q + (q - centre).normalize() * 0.2;
+        let points = [off((a + b + c) / 3.0), off(0.5 * (a + b)), off(a)];
+        let features: Vec<Feature> = points
+            .iter()
+            .map(|y| tool.feature_on(tool.nearest(y).unwrap().triangle, y))
+            .collect();
+        assert!(matches!(features[0], Feature::Face), "{features:?}");
+        assert!(matches!(features[1], Feature::Edge(_)), "{features:?}");
+        assert!(matches!(features[2], Feature::Vertex), "{features:?}");
+        for (k, &y) in points.iter().enumerate() {
             let at = |z: Vector3<f64>| {
                 pair_contact(&tool, &z, 500.0, &SETTINGS, Some(&lag), (0.01, true, None)).unwrap()
             };

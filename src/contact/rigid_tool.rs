@@ -8,7 +8,9 @@
 //! the list instead of the grid.
 
 use super::penalty::ToolLoad;
-use super::surface::{closest_point_on_triangle, Projection, TriangleSurface};
+use super::surface::{
+    closest_feature_on_triangle, closest_point_on_triangle, Feature, Projection, TriangleSurface,
+};
 use nalgebra::Vector3;
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -183,14 +185,10 @@ impl RigidTool {
             })
     }
 
-    /// The nearest point of triangle `k` alone to `p`: [`Self::nearest`] once the triangle is
-    /// known, for derivatives by differences near a point already projected.
-    pub fn project_on(&self, k: usize, p: &Vector3<f64>) -> Projection {
-        Projection {
-            triangle: k,
-            point: self.closest_on(k, p),
-            normal: self.surface.normal(k),
-        }
+    /// The [`Feature`] of triangle `k` that holds its point nearest to `p`.
+    pub fn feature_on(&self, k: usize, p: &Vector3<f64>) -> Feature {
+        let [a, b, c] = self.surface.triangles[k].map(|i| self.surface.vertices[i]);
+        closest_feature_on_triangle(p, &a, &b, &c).1
     }
 
     fn closest_on(&self, k: usize, p: &Vector3<f64>) -> Vector3<f64> {

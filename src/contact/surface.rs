@@ -129,40 +129,66 @@ pub fn closest_point_on_triangle(
     b: &Vector3<f64>,
     c: &Vector3<f64>,
 ) -> Vector3<f64> {
+    closest_feature_on_triangle(p, a, b, c).0
+}
+
+/// Where on a triangle its point nearest to a query lies: what the distance's second
+/// derivative depends on (the nearest point slides with the query over a face, along an edge,
+/// not at all at a corner).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Feature {
+    Vertex,
+    /// An edge, with its unit direction.
+    Edge(Vector3<f64>),
+    Face,
+}
+
+/// [`closest_point_on_triangle`] and the [`Feature`] it lies on (Ericson, Real-Time Collision
+/// Detection, 5.1.5).
+pub fn closest_feature_on_triangle(
+    p: &Vector3<f64>,
+    a: &Vector3<f64>,
+    b: &Vector3<f64>,
+    c: &Vector3<f64>,
+) -> (Vector3<f64>, Feature) {
     let ab = b - a;
     let ac = c - a;
     let ap = p - a;
     let d1 = ab.dot(&ap);
     let d2 = ac.dot(&ap);
     if d1 <= 0.0 && d2 <= 0.0 {
-        return *a;
+        return (*a, Feature::Vertex);
     }
     let bp = p - b;
     let d3 = ab.dot(&bp);
     let d4 = ac.dot(&bp);
     if d3 >= 0.0 && d4 <= d3 {
-        return *b;
+        return (*b, Feature::Vertex);
     }
     let vc = d1 * d4 - d3 * d2;
     if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        return a + ab * (d1 / (d1 - d3));
+        return (a + ab * (d1 / (d1 - d3)), Feature::Edge(ab.normalize()));
     }
     let cp = p - c;
     let d5 = ab.dot(&cp);
     let d6 = ac.dot(&cp);
     if d6 >= 0.0 && d5 <= d6 {
-        return *c;
+        return (*c, Feature::Vertex);
     }
     let vb = d5 * d2 - d1 * d6;
     if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        return a + ac * (d2 / (d2 - d6));
+        return (a + ac * (d2 / (d2 - d6)), Feature::Edge(ac.normalize()));
     }
     let va = d3 * d6 - d5 * d4;
     if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
-        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+        let bc = c - b;
+        return (
+            b + bc * ((d4 - d3) / ((d4 - d3) + (d5 - d6))),
+            Feature::Edge(bc.normalize()),
+        );
     }
     let denom = 1.0 / (va + vb + vc);
-    a + ab * (vb * denom) + ac * (vc * denom)
+    (a + ab * (vb * denom) + ac * (vc * denom), Feature::Face)
 }
 
 #[cfg(test)]

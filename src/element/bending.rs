@@ -162,16 +162,13 @@ impl Bending {
     }
 
     /// Tangent stiffness of patch `t` at `x`, `d forces / dx` over its nodes (3 rows and
-    /// columns per node, in patch order). With `exact`, central differences of
-    /// [`Self::forces`]; otherwise its Gauss–Newton part `J^T H J`, `J = dk/dx` the curvature's
-    /// Jacobian (the normal's turn included) and `H = d^2 W / dk^2`: positive semi-definite,
-    /// what is left out is the moment times the curvature's second derivative, small next to
-    /// it while the heights over the patch are small against its size (docs/solver.md).
+    /// columns per node, in patch order): its Gauss–Newton part `J^T H J`, `J = dk/dx` the
+    /// curvature's Jacobian (the normal's turn included) and `H = d^2 W / dk^2`, positive
+    /// semi-definite; with `exact`, plus the moments times the curvature's second derivative,
+    /// which the Gauss–Newton part leaves out (small next to it while the heights over the
+    /// patch are small against its size, docs/solver.md).
     pub fn stiffness(&self, t: &BendingPatch, x: &[Vector3<f64>], exact: bool) -> DMatrix<f64> {
         let size = 3 * t.nodes.len();
-        if exact {
-            return self.difference_stiffness(t, x);
-        }
         let frame = CurrentPlane::of(t, x);
         // J: row m the gradient of curvature component m
         let mut jacobian = DMatrix::<f64>::zeros(3, size);
@@ -192,7 +189,13 @@ impl Bending {
             }
         }
         let h = self.curvature_hessian(t);
-        jacobian.transpose() * h * jacobian
+        let mut stiffness = jacobian.transpose() * h * jacobian;
+        if exact {
+            let k = t.curvature(&frame, x) - t.rest_curvature;
+            let moments = self.energy_and_moments(t, &k).1;
+            add_moment_stiffness(t, x, &frame, &moments, &mut stiffness);
+        }
+        stiffness
     }
 
     /// `d^2 (A W) / dk^2`, constant: the energy is quadratic in the curvature change.
@@ -204,31 +207,6 @@ impl Bending {
             h.set_column(m, &self.energy_and_moments(t, &unit).1);
         }
         h
-    }
-
-    fn difference_stiffness(&self, t: &BendingPatch, x: &[Vector3<f64>]) -> DMatrix<f64> {
-        let n = t.nodes.len();
-        let mut k = DMatrix::zeros(3 * n, 3 * n);
-        let step = 1e-6 * t.altitude;
-        let mut y = x.to_vec();
-        let mut plus = vec![Vector3::zeros(); n];
-        let mut minus = vec![Vector3::zeros(); n];
-        for j in 0..n {
-            for d in 0..3 {
-                let node = t.nodes[j];
-                y[node][d] = x[node][d] + step;
-                self.forces(t, &y, &mut plus);
-                y[node][d] = x[node][d] - step;
-                self.forces(t, &y, &mut minus);
-                y[node][d] = x[node][d];
-                for i in 0..n {
-                    for e in 0..3 {
-                        k[(3 * i + e, 3 * j + d)] = (plus[i][e] - minus[i][e]) / (2.0 * step);
-                    }
-                }
-            }
-        }
-        k
     }
 
     /// Bending energy of triangle `t` (N·mm).
@@ -378,6 +356,16 @@ impl CurrentPlane {
         }
     }
 
+    /// `A_c` with `dN = sum_c A_c dx_c`: `A_0 = [e2 - e1]x`, `A_1 = -[e2]x`, `A_2 = [e1]x`.
+    fn cross_operators(&self) -> [Matrix3<f64>; 3] {
+        let [e1, e2] = self.edges;
+        [
+            (e2 - e1).cross_matrix(),
+            -e2.cross_matrix(),
+            e1.cross_matrix(),
+        ]
+    }
+
     /// `d(v . n)/dx` for the three corners at fixed `v`: with `u = (I - n n^T) v / |N|`,
     /// `v . dn = u . dN` and `dN = dx1 x e2 + e1 x dx2 + dx0 x (e1 - e2)`.
     fn normal_gradient(&self, v: &Vector3<f64>) -> [Vector3<f64>; 3] {
@@ -385,6 +373,66 @@ impl CurrentPlane {
         let u = projector * v / self.norm;
         let [e1, e2] = self.edges;
         [(e1 - e2).cross(&u), e2.cross(&u), u.cross(&e1)]
+    }
+}
+
+/// Adds `sum_m M_m d^2 k_m / dx^2` to `stiffness`, `M = dW/dk` the moments: the Hessian of
+/// `phi = v . n` at fixed `M`, with `v = sum_a w_a x_a`, `w_i = G_i . M` on the 1-ring,
+/// `w_0 = -sum_i w_i` and `n` the unit normal of the corners. Block `(a, b)` is
+/// `w_b J_a^T + w_a J_b + Q_ab`, `J_c = dn/dx_c` (zero off the corners) and `Q_ab` the second
+/// derivative of `v . n` at fixed `v` over the corners (docs/solver.md, "Bending tangent").
+fn add_moment_stiffness(
+    t: &BendingPatch,
+    x: &[Vector3<f64>],
+    frame: &CurrentPlane,
+    moments: &Vector3<f64>,
+    stiffness: &mut DMatrix<f64>,
+) {
+    let nodes = t.nodes.len();
+    let mut weights = vec![0.0; nodes];
+    let mut lever = Vector3::zeros();
+    for i in 3..nodes {
+        weights[i] = t.curvature_operator[i].dot(moments);
+        weights[0] -= weights[i];
+        lever += (x[t.nodes[i]] - frame.origin) * weights[i];
+    }
+    let mut add = |a: usize, b: usize, block: &Matrix3<f64>| {
+        let mut view = stiffness.fixed_view_mut::<3, 3>(3 * a, 3 * b);
+        view += block;
+    };
+    let cross = frame.cross_operators();
+    let projector = Matrix3::identity() - frame.normal * frame.normal.transpose();
+    let normal_jacobians = cross.map(|a| projector * a / frame.norm);
+    for (c, jc) in normal_jacobians.iter().enumerate() {
+        for (m, &w) in weights.iter().enumerate() {
+            if w != 0.0 {
+                add(c, m, &(jc.transpose() * w));
+                add(m, c, &(jc * w));
+            }
+        }
+    }
+    let pv = projector * lever;
+    // u = P v / |N| as in `normal_gradient`, and du = du_dn dN
+    let du_dn = -(pv * frame.normal.transpose()
+        + frame.normal * pv.transpose()
+        + projector * frame.normal.dot(&lever))
+        / (frame.norm * frame.norm);
+    let u = pv / frame.norm;
+    let s = u.cross_matrix();
+    // u . d^2N over (x_a, x_b) for N = (x1 - x0) x (x2 - x0)
+    let second = [
+        [Matrix3::zeros(), -s, s],
+        [s, Matrix3::zeros(), -s],
+        [-s, s, Matrix3::zeros()],
+    ];
+    for a in 0..3 {
+        for b in 0..3 {
+            add(
+                a,
+                b,
+                &(second[a][b] + cross[a].transpose() * du_dn * cross[b]),
+            );
+        }
     }
 }
 

@@ -42,9 +42,11 @@ pub struct Layout {
     /// The mean element size (mm), the scale of a Newton correction at the rounding of the
     /// positions; set by the solver.
     pub length_scale: f64,
-    /// Where the stored entries of each node pair of the pattern start, see [`Layout::place`].
-    element_nodes: Vec<Vec<usize>>,
-    patch_nodes: Vec<Vec<usize>>,
+    /// Where each element's and each bending patch's entries are stored.
+    elements: Vec<Scatter>,
+    patches: Vec<Scatter>,
+    /// Where each node's own 3x3 block is stored (contact, drag).
+    diagonal: Vec<Scatter>,
 }
 
 impl Layout {
@@ -100,6 +102,10 @@ impl Layout {
             }
         }
         let pattern = Pattern::from_groups(size, groups.iter().map(|g| &g[..]));
+        let scatter = |nodes: &Vec<usize>| Scatter::new(&pattern, &held, nodes);
+        let elements = element_nodes.iter().map(scatter).collect();
+        let patches = patch_nodes.iter().map(scatter).collect();
+        let diagonal = (0..nodes).map(|n| scatter(&vec![n])).collect();
         let tool_drag = 1e-9 * penalty.iter().sum::<f64>();
         Self {
             nodes,
@@ -113,8 +119,9 @@ impl Layout {
             tool_drag,
             force_floor: 0.0,
             length_scale: 0.0,
-            element_nodes,
-            patch_nodes,
+            elements,
+            patches,
+            diagonal,
         }
     }
 }
@@ -135,7 +142,7 @@ pub struct IncrementStart<'a> {
 pub enum Tangent {
     /// No tangent: the residual only (line search).
     None,
-    /// The consistent tangent; bending, hourglass and contact differenced or by their
+    /// The consistent tangent; bending, hourglass and contact exact or by their
     /// Gauss–Newton parts as set in [`Evaluator::exact`].
     Consistent,
     /// Every element's tangent made positive semi-definite (the material tangent's and the
@@ -153,6 +160,7 @@ pub struct Trial<'a> {
 }
 
 /// Everything evaluated at a trial configuration.
+#[derive(Clone)]
 pub struct Evaluation {
     /// `dPi/dz` for every unknown (held ones included: there it is the reaction).
     pub residual: Vec<f64>,
@@ -177,8 +185,10 @@ pub struct Evaluation {
 pub struct Evaluator<'a> {
     pub model: &'a Model,
     pub layout: &'a Layout,
-    /// Tangents of bending, hourglass and contact by central differences of their forces,
-    /// instead of their Gauss–Newton parts (which the projected tangent always takes).
+    /// The exact tangents of bending, hourglass and contact (the moments times the
+    /// curvature's second derivative, the turn of the yarns and normal, the turn of the tool's
+    /// normal over its edges), instead of their Gauss–Newton parts (which the projected
+    /// tangent always takes).
     pub exact: bool,
     /// Regularising sliding speed of friction (mm/s): the slip `eps` of an increment is it
     /// times the increment's duration.
@@ -225,16 +235,12 @@ impl Evaluator<'_> {
             for (i, share) in shares.into_iter().enumerate() {
                 let share = share?;
                 potential += share.potential;
-                let nodes = &layout.element_nodes[c * CHUNK + i];
-                for (a, &n) in nodes.iter().enumerate() {
+                let scatter = &layout.elements[c * CHUNK + i];
+                for (a, &n) in scatter.nodes.iter().enumerate() {
                     internal[n] += share.forces[a];
                 }
                 if let (Some(values), Some(k)) = (matrix.as_mut(), &share.stiffness) {
-                    for (a, &na) in nodes.iter().enumerate() {
-                        for (b, &nb) in nodes.iter().enumerate() {
-                            add_block(layout, values, na, nb, &k[a][b]);
-                        }
-                    }
+                    scatter.add(&layout.held, values, |a, b| k[a][b]);
                 }
                 responses.push(share.response);
                 states.push(share.state);
@@ -260,17 +266,14 @@ impl Evaluator<'_> {
                     .collect();
                 for (i, (f, k, energy)) in shares.into_iter().enumerate() {
                     potential += energy;
-                    let nodes = &layout.patch_nodes[c * CHUNK + i];
-                    for (a, &n) in nodes.iter().enumerate() {
+                    let scatter = &layout.patches[c * CHUNK + i];
+                    for (a, &n) in scatter.nodes.iter().enumerate() {
                         internal[n] += f[a];
                     }
                     if let (Some(values), Some(k)) = (matrix.as_mut(), k) {
-                        for (a, &na) in nodes.iter().enumerate() {
-                            for (b, &nb) in nodes.iter().enumerate() {
-                                let block = k.fixed_view::<3, 3>(3 * a, 3 * b).into_owned();
-                                add_block(layout, values, na, nb, &block);
-                            }
-                        }
+                        scatter.add(&layout.held, values, |a, b| {
+                            k.fixed_view::<3, 3>(3 * a, 3 * b).into_owned()
+                        });
                     }
                 }
             }
@@ -293,7 +296,7 @@ impl Evaluator<'_> {
                 residual[3 * n + d] += c * travel[d];
             }
             if let Some(values) = matrix.as_mut() {
-                add_block(layout, values, n, n, &(Matrix3::identity() * c));
+                layout.diagonal[n].add(&layout.held, values, |_, _| Matrix3::identity() * c);
             }
         }
         for (k, unknown) in layout.tool_unknown.iter().enumerate() {
@@ -456,7 +459,7 @@ impl Evaluator<'_> {
                     _ => pair.hessian,
                 };
                 if let Some(values) = matrix.as_deref_mut() {
-                    add_block(layout, values, n, n, &hessian);
+                    layout.diagonal[n].add(&layout.held, values, |_, _| hessian);
                 }
                 if let (Some(u), Some((axis, _))) = (layout.tool_unknown[k], layout.tool_force[k]) {
                     // the pair's potential depends on y = x - u axis
@@ -480,25 +483,68 @@ impl Evaluator<'_> {
     }
 }
 
-/// Adds the 3x3 block of nodes `(a, b)` to the lower triangle, skipping held unknowns.
-fn add_block(layout: &Layout, values: &mut [f64], a: usize, b: usize, block: &Matrix3<f64>) {
-    if a < b {
-        return;
-    }
-    for e in 0..3 {
-        let j = 3 * b + e;
-        if layout.held[j] {
-            continue;
+/// Where the lower-triangle entries of the 3x3 blocks of a group of nodes (an element, a
+/// patch, one node) are stored, found once: for every pair `(a, b)` of its nodes with
+/// `nodes[a] >= nodes[b]`, in that order, and every column `e` of the block, the place of its
+/// first stored row ([`Scatter::SKIP`] where the column is held). A binary search per column
+/// and block was the largest single cost of the assembly.
+struct Scatter {
+    nodes: Vec<usize>,
+    places: Vec<u32>,
+}
+
+impl Scatter {
+    const SKIP: u32 = u32::MAX;
+
+    fn new(pattern: &Pattern, held: &[bool], nodes: &[usize]) -> Self {
+        let mut places = Vec::new();
+        for &na in nodes {
+            for &nb in nodes {
+                if na < nb {
+                    continue;
+                }
+                for e in 0..3 {
+                    let j = 3 * nb + e;
+                    let first = if na == nb { e } else { 0 };
+                    let place = pattern
+                        .place(3 * na + first, j)
+                        .filter(|_| !held[j])
+                        .map_or(Self::SKIP, |p| {
+                            u32::try_from(p).expect("fewer than 4e9 tangent entries")
+                        });
+                    places.push(place);
+                }
+            }
         }
-        let first = if a == b { e } else { 0 };
-        let Some(start) = layout.pattern.place(3 * a + first, j) else {
-            continue;
-        };
-        for d in first..3 {
-            let i = 3 * a + d;
-            // rows of one node are stored one after the other in a column
-            if !layout.held[i] {
-                values[start + (d - first)] += block[(d, e)];
+        Self {
+            nodes: nodes.to_vec(),
+            places,
+        }
+    }
+
+    /// Adds `block(a, b)`, the 3x3 block of local nodes `(a, b)`, for every pair of the
+    /// group, skipping held rows and columns.
+    fn add(&self, held: &[bool], values: &mut [f64], block: impl Fn(usize, usize) -> Matrix3<f64>) {
+        let mut places = self.places.iter();
+        for (a, &na) in self.nodes.iter().enumerate() {
+            for (b, &nb) in self.nodes.iter().enumerate() {
+                if na < nb {
+                    continue;
+                }
+                let k = block(a, b);
+                for e in 0..3 {
+                    let start = *places.next().expect("a place per column");
+                    if start == Self::SKIP {
+                        continue;
+                    }
+                    let first = if na == nb { e } else { 0 };
+                    for d in first..3 {
+                        // rows of one node are stored one after the other in a column
+                        if !held[3 * na + d] {
+                            values[start as usize + (d - first)] += k[(d, e)];
+                        }
+                    }
+                }
             }
         }
     }
