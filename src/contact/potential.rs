@@ -162,8 +162,7 @@ fn normal_hessian(
     let (n, distance) = p.direction_to(y);
     let k = stiffness;
     let spring = n * n.transpose() * k;
-    let in_front = (y - p.point).dot(&p.normal) > 0.0 && distance > 0.0;
-    if !in_front {
+    if !p.in_front(y) {
         return spring;
     }
     let turn = match tool.feature_on(p.triangle, y) {

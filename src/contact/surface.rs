@@ -30,13 +30,19 @@ impl Projection {
     /// of `t/2 (1 - cos)` of half the facet angle); the facet's normal when `x` is behind it.
     pub fn direction_to(&self, x: &Vector3<f64>) -> (Vector3<f64>, f64) {
         let d = x - self.point;
-        let along = d.dot(&self.normal);
-        let distance = d.norm();
-        if along > 0.0 && distance > 0.0 {
+        if self.in_front(x) {
+            let distance = d.norm();
             (d / distance, distance)
         } else {
-            (self.normal, along)
+            (self.normal, d.dot(&self.normal))
         }
+    }
+
+    /// Whether `x` is on the blank's side of the surface (and off it): where
+    /// [`Self::direction_to`] is the unit vector from the nearest point, not the facet's normal.
+    pub fn in_front(&self, x: &Vector3<f64>) -> bool {
+        let d = x - self.point;
+        d.dot(&self.normal) > 0.0 && d.norm() > 0.0
     }
 }
 

@@ -160,7 +160,6 @@ pub struct Trial<'a> {
 }
 
 /// Everything evaluated at a trial configuration.
-#[derive(Clone)]
 pub struct Evaluation {
     /// `dPi/dz` for every unknown (held ones included: there it is the reaction).
     pub residual: Vec<f64>,

@@ -526,6 +526,24 @@ fn newton(
             residuals,
             reason,
         };
+    // a solution on the frozen contact set, taken on the free set where it holds there
+    let on_free = |x: &[Vector3<f64>],
+                   translations: &[Vector3<f64>],
+                   evaluation: &Evaluation,
+                   scale: f64,
+                   stats: &mut ImplicitStatistics,
+                   residuals: &[f64]| {
+        let tolerance = settings.tolerance * scale;
+        on_free_set(
+            evaluator,
+            start,
+            (x, translations),
+            evaluation,
+            tolerance,
+            stats,
+        )
+        .map_err(|(k, e)| fail(residuals.to_vec(), None, format!("element {k}: {e}")))
+    };
     let mut frozen: Option<Vec<Vec<bool>>> = None;
     let mut freezes = 0;
     let mut worst = Vec::new();
@@ -568,16 +586,7 @@ fn newton(
                 return Ok((evaluation, x, translations, iteration + 1));
             }
             // solved on the frozen contact set: the solution if the set is the right one
-            if let Some(free) = on_free_set(
-                evaluator,
-                start,
-                (&x, &translations),
-                &evaluation,
-                settings.tolerance * scale,
-                stats,
-            )
-            .map_err(|(k, e)| fail(residuals.clone(), None, format!("element {k}: {e}")))?
-            {
+            if let Some(free) = on_free(&x, &translations, &evaluation, scale, stats, &residuals)? {
                 return Ok((free, x, translations, iteration + 1));
             }
             frozen = None;
@@ -716,19 +725,14 @@ fn newton(
             if at_rounding && !stalled {
                 return Ok((evaluation, x, translations, iteration + 1));
             }
+            if settled && frozen.is_none() {
+                return Ok((evaluation, x, translations, iteration + 1));
+            }
             if settled {
-                if let Some(solved) = settle(
-                    evaluator,
-                    start,
-                    (&x, &translations),
-                    &evaluation,
-                    frozen.is_some(),
-                    settings.tolerance * scale,
-                    stats,
-                )
-                .map_err(|(k, e)| fail(residuals.clone(), None, format!("element {k}: {e}")))?
+                if let Some(free) =
+                    on_free(&x, &translations, &evaluation, scale, stats, &residuals)?
                 {
-                    return Ok((solved, x, translations, iteration + 1));
+                    return Ok((free, x, translations, iteration + 1));
                 }
             }
             if stalled {
@@ -810,31 +814,6 @@ const CORRECTION_FLOOR: f64 = 1e-9;
 /// settled to a millionth of the cells.
 const CORRECTION_TOLERANCE: f64 = 1e-5;
 const CORRECTION_RESIDUAL_SLACK: f64 = 100.0;
-
-/// A settled solution (see [`CORRECTION_TOLERANCE`]): `evaluation` itself, or where it is on
-/// the frozen contact set, [`on_free_set`].
-fn settle(
-    evaluator: &Evaluator,
-    start: &IncrementStart,
-    configuration: (&[Vector3<f64>], &[Vector3<f64>]),
-    evaluation: &Evaluation,
-    frozen: bool,
-    tolerance: f64,
-    stats: &mut ImplicitStatistics,
-) -> Result<Option<Evaluation>, (usize, crate::material::MaterialError)> {
-    if frozen {
-        on_free_set(
-            evaluator,
-            start,
-            configuration,
-            evaluation,
-            tolerance,
-            stats,
-        )
-    } else {
-        Ok(Some(evaluation.clone()))
-    }
-}
 
 /// A solution on the frozen contact set, `frozen` its evaluation, taken on the free set: the
 /// evaluation there when its residual is within `tolerance` (N), or when the springs the
