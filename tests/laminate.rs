@@ -8,8 +8,9 @@ use nalgebra::{Matrix2, Matrix3, Matrix3x2};
 use proptest::prelude::*;
 use std::sync::Arc;
 use thermostamp::experiment::material_point::{drive_laminate, MembraneSample};
+use thermostamp::material::laminate::BackwardEulerStep;
 use thermostamp::material::{
-    FibreDirections, Laminate, MaterialError, MaterialLaw, MembraneKinematics,
+    FibreDirections, Laminate, Layer, MaterialCard, MaterialError, MaterialLaw, MembraneKinematics,
 };
 
 const T: f64 = 300.0;
@@ -111,6 +112,48 @@ proptest! {
         let rotated = respond(q * f3, omega * q * f3 + q * f3_dot);
         prop_assert!((plain.n - rotated.n).amax() <= 1e-9 * plain.n.amax().max(1e-6));
         prop_assert!((plain.thickness - rotated.thickness).abs() < 1e-12);
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(100))]
+
+    /// docs/solver.md, "Laminate tangent": the implicit solver's `D = dN/dE` from the layers'
+    /// stress derivatives, with plane stress condensed into the matrix layers and the fabric's
+    /// volume kept, equals central differences of the laminate's response over a
+    /// backward-Euler step, for the matrix layers alone, the fabric alone and the A:B:A stack,
+    /// on the shipped card and on a very viscous melt (`eta1 = 5 MPa·s`).
+    #[test]
+    fn step_tangent_is_the_derivative_of_the_step_response(
+        f_start in in_plane_gradient(),
+        f in in_plane_gradient(),
+        angle in 0.0..3.2f64,
+        dt in prop::sample::select(vec![1e-3, 0.05, 1.0]),
+    ) {
+        for card in [t300_card(), MaterialCard::load(&repo_path("tests/data/viscous-prepreg.toml")).unwrap()] {
+            let matrix: Arc<dyn MaterialLaw> = card.matrix.clone().unwrap();
+            let fabric: Arc<dyn MaterialLaw> = card.fabric.clone();
+            let stacks = [
+                ("matrix", Laminate::new(vec![Layer { law: matrix.clone(), thickness: 0.05 }; 2]).unwrap()),
+                ("fabric", Laminate::new(vec![Layer { law: fabric, thickness: 0.2 }]).unwrap()),
+                ("A:B:A", card.laminate.clone()),
+            ];
+            for (name, laminate) in stacks {
+                let fibres = FibreDirections::in_plane(angle);
+                let c_of = |f: &Matrix2<f64>| f.transpose() * f;
+                // the start of the step: the state reached from rest over one step
+                let first = BackwardEulerStep { c: c_of(&f_start), c_start: Matrix2::identity(), dt, temperature: T, fibres };
+                let (_, start, _) = laminate.step_tangent(&first, &laminate.initial_state()).unwrap();
+                let step = BackwardEulerStep { c: c_of(&f), c_start: c_of(&f_start), ..first };
+                let (_, _, exact) = laminate.step_tangent(&step, &start).unwrap();
+                let differenced = laminate.differenced_step_tangent(&step, &start).unwrap();
+                let scale = exact.amax().max(1e-9);
+                prop_assert!(
+                    (exact - differenced).amax() < 1e-5 * scale,
+                    "{name}, dt {dt}: {exact} vs {differenced}"
+                );
+            }
+        }
     }
 }
 

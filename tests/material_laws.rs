@@ -124,6 +124,71 @@ proptest! {
     }
 }
 
+/// `dS` along `(dC, dCdot)` by central differences of the stress of `law` (step `h` of both).
+fn stress_change_by_differences(
+    law: &dyn MaterialLaw,
+    p: &PointKinematics,
+    (dc, dc_dot): (&Matrix3<f64>, &Matrix3<f64>),
+    h: f64,
+) -> Matrix3<f64> {
+    let at = |sign: f64| {
+        let moved = PointKinematics {
+            c: p.c + dc * (sign * h),
+            c_dot: p.c_dot + dc_dot * (sign * h),
+            ..*p
+        };
+        law.second_piola_kirchhoff(&moved).unwrap()
+    };
+    (at(1.0) - at(-1.0)) / (2.0 * h)
+}
+
+/// A symmetric direction from six numbers.
+fn symmetric(v: [f64; 6]) -> Matrix3<f64> {
+    Matrix3::new(v[0], v[3], v[4], v[3], v[1], v[5], v[4], v[5], v[2])
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(300))]
+
+    /// docs/model.md §2 and §3, "Tangent": each law's stress derivatives (the implicit
+    /// solver's consistent tangent) equal central differences of its stress along random
+    /// changes of `C` and `Cdot`; the matrix with its viscous stress, the fabric with yarns
+    /// slack, in their slack band and taut.
+    #[test]
+    fn stress_derivatives_are_the_derivatives_of_the_stress(
+        f in deformation_gradient(),
+        f_dot in deformation_rate(),
+        gamma in -60.0..60.0f64,
+        la in 0.98..1.01f64,
+        lb in 0.98..1.01f64,
+        dc in prop::array::uniform6(-1.0..1.0f64),
+        dc_dot in prop::array::uniform6(-1.0..1.0f64),
+    ) {
+        let card = t300_card();
+        let matrix = card.matrix.as_deref().unwrap();
+        let fabric = unbalanced_fabric();
+        let fibres = FibreDirections::in_plane(0.4);
+        let to_fibres = rotation([0.0, 0.0, 0.4]);
+        let sheared = to_fibres * trellis(gamma.to_radians(), la, lb, 1.0) * to_fibres.transpose();
+        let cases: [(&dyn MaterialLaw, PointKinematics, f64); 2] = [
+            (matrix, point(&f, &f_dot, fibres), 1e-6),
+            // a step well inside the slack band, so that a difference seldom straddles its ends
+            (&fabric, point(&sheared, &Matrix3::zeros(), fibres), 1e-7),
+        ];
+        let direction = (symmetric(dc), symmetric(dc_dot));
+        for (law, p, h) in cases {
+            let mut exact = [Matrix3::zeros()];
+            prop_assert!(law.stress_derivatives(&p, &[direction], &mut exact).unwrap());
+            let by_differences = stress_change_by_differences(law, &p, (&direction.0, &direction.1), h);
+            let scale = by_differences.amax().max(exact[0].amax()).max(1e-3);
+            prop_assert!(
+                relative_difference(&exact[0], &by_differences, scale) < 1e-5,
+                "{}: {} vs {}", law.name(), exact[0], by_differences
+            );
+        }
+    }
+}
+
 /// docs/model.md §7.3: no stress in the undeformed state at rest, at every table temperature.
 #[test]
 fn no_stress_at_rest() {

@@ -131,10 +131,38 @@ impl YarnTension {
         tangent.max(self.coefficients.first().copied().unwrap_or(0.0))
     }
 
+    /// `d tension / d lambda` (MPa): `f A_2` slack, rising across the slack band to `A_2`, plus
+    /// the slope of the higher terms when taut.
+    pub fn stiffness(&self, stretch: f64) -> f64 {
+        let e = stretch - 1.0;
+        let (a2, f_a2) = (self.initial_stiffness(), self.compression_stiffness);
+        let linear = if e <= 0.0 {
+            f_a2
+        } else if e >= SLACK_BAND {
+            a2
+        } else {
+            f_a2 + (a2 - f_a2) * e / SLACK_BAND
+        };
+        let higher: f64 = self
+            .coefficients
+            .iter()
+            .enumerate()
+            .skip(1)
+            .map(|(i, a)| a * (i + 1) as f64 * e.max(0.0).powi(i as i32))
+            .sum();
+        linear + higher
+    }
+
     /// `dW_t/dI = (dW_t/dlambda) / (2 lambda)` with `lambda = sqrt(I)`.
     fn derivative_wrt_invariant(&self, invariant: f64) -> f64 {
         let stretch = invariant.sqrt();
         self.tension(stretch) / (2.0 * stretch)
+    }
+
+    /// `d^2 W_t / dI^2 = (lambda t'(lambda) - t(lambda)) / (4 lambda^3)`, `t` the tension.
+    fn second_derivative_wrt_invariant(&self, invariant: f64) -> f64 {
+        let stretch = invariant.sqrt();
+        (stretch * self.stiffness(stretch) - self.tension(stretch)) / (4.0 * stretch.powi(3))
     }
 }
 
@@ -253,6 +281,34 @@ impl WovenFabric {
     pub fn new(warp: YarnTension, weft: YarnTension, shear: ShearInteraction) -> Self {
         Self { warp, weft, shear }
     }
+
+    /// `W_ij = d^2 W / dI_i dI_j` over `(I4, I6, I8)` (docs/model.md §3, "Tangent"): the
+    /// yarns' `d^2 W_t / dI^2` on the diagonal, and the shear's `W_s' d^2 I10 + W_s'' dI10 (x)
+    /// dI10` with `I10 = I8^2 / (I4 I6)`.
+    fn invariant_hessian(&self, inv: &FibreInvariants) -> Matrix3<f64> {
+        let (i4, i6, i8) = (inv.i4, inv.i6, inv.i8);
+        let i10 = inv.i10();
+        let grad = Vector3::new(-i10 / i4, -i10 / i6, 2.0 * i8 / (i4 * i6));
+        let d46 = i10 / (i4 * i6);
+        let d48 = -2.0 * i8 / (i4 * i4 * i6);
+        let d68 = -2.0 * i8 / (i4 * i6 * i6);
+        let hessian = Matrix3::new(
+            2.0 * i10 / (i4 * i4),
+            d46,
+            d48,
+            d46,
+            2.0 * i10 / (i6 * i6),
+            d68,
+            d48,
+            d68,
+            2.0 / (i4 * i6),
+        );
+        let mut w = hessian * self.shear.derivative(i10)
+            + grad * grad.transpose() * self.shear.second_derivative(i10);
+        w[(0, 0)] += self.warp.second_derivative_wrt_invariant(i4);
+        w[(1, 1)] += self.weft.second_derivative_wrt_invariant(i6);
+        w
+    }
 }
 
 impl MaterialLaw for WovenFabric {
@@ -283,6 +339,31 @@ impl MaterialLaw for WovenFabric {
         Ok(dyad(a0, a0) * (2.0 * w4)
             + dyad(b0, b0) * (2.0 * w6)
             + (dyad(a0, b0) + dyad(b0, a0)) * w8)
+    }
+
+    /// docs/model.md §3, "Tangent": with `W_ij` the second partial derivatives of `W` in the
+    /// invariants `(I4, I6, I8)` ([`WovenFabric::invariant_hessian`]), `dW_i = sum_j W_ij dI_j`
+    /// with `dI4 = a0.dC.a0`, `dI6 = b0.dC.b0`, `dI8 = a0.dC.b0`, and
+    /// `dS = 2 dW4 a0(x)a0 + 2 dW6 b0(x)b0 + dW8 (a0(x)b0 + b0(x)a0)`. Exact across the yarns'
+    /// slack band, where central differences of the stress straddle the jump of the tension's
+    /// curvature at the rest length; rate-independent.
+    fn stress_derivatives(
+        &self,
+        point: &PointKinematics,
+        directions: &[(Matrix3<f64>, Matrix3<f64>)],
+        derivatives: &mut [Matrix3<f64>],
+    ) -> Result<bool, MaterialError> {
+        ensure_finite(self.name(), point)?;
+        let inv = FibreInvariants::of(&point.c, &point.fibres)?;
+        let w = self.invariant_hessian(&inv);
+        let (a0, b0) = (&point.fibres.warp, &point.fibres.weft);
+        let (aa, bb, ab) = (dyad(a0, a0), dyad(b0, b0), dyad(a0, b0) + dyad(b0, a0));
+        for ((dc, _), ds) in directions.iter().zip(derivatives.iter_mut()) {
+            let di = Vector3::new(a0.dot(&(dc * a0)), b0.dot(&(dc * b0)), a0.dot(&(dc * b0)));
+            let dw = w * di;
+            *ds = aa * (2.0 * dw.x) + bb * (2.0 * dw.y) + ab * dw.z;
+        }
+        Ok(true)
     }
 
     /// Both yarn families plus the shear stiffness `4 (|W_s'| + |W_s''|)` (a bound on the second

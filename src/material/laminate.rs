@@ -111,11 +111,17 @@ impl BackwardEulerStep {
     }
 }
 
-/// Step in the Green strain of the central differences of [`Laminate::step_tangent`]: well
-/// inside the yarns' slack band (`fabric::SLACK_BAND`, 1e-4), so that a difference does not
-/// straddle it; the plane-stress solve's tolerance (1e-12 of the stress) over `h` sets its
-/// error, 1e-6.
+/// Step in the Green strain of the central differences of
+/// [`Laminate::differenced_step_tangent`]: the plane-stress solve's tolerance (1e-12 of the
+/// stress) over `h` sets its error, 1e-6.
 const TANGENT_STEP: f64 = 1e-6;
+
+/// The changes of the in-plane `C` of a unit change of each Voigt strain `(E11, E22, 2 E12)`.
+const STRAIN_UNITS: [Matrix2<f64>; 3] = [
+    Matrix2::new(2.0, 0.0, 0.0, 0.0),
+    Matrix2::new(0.0, 0.0, 0.0, 2.0),
+    Matrix2::new(0.0, 1.0, 1.0, 0.0),
+];
 
 /// The laminate's state variables at one point: per layer, `lambda3` and `dlambda3/dt`.
 #[derive(Clone, Debug, PartialEq)]
@@ -125,7 +131,7 @@ pub struct LaminateState {
 }
 
 /// Membrane response of the laminate at one point.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct MembraneResponse {
     /// 2nd Piola–Kirchhoff membrane resultant per unit reference width (N/mm), docs/model.md §4.
     pub n: Matrix2<f64>,
@@ -214,56 +220,200 @@ impl Laminate {
         dt: f64,
         state: &mut LaminateState,
     ) -> Result<MembraneResponse, MaterialError> {
-        let mut n = Matrix2::zeros();
-        let mut thickness = 0.0;
-        for group in &self.groups {
-            let previous = state.thickness_stretch[group[0]];
-            let shared = self.solve_layer(group[0], kin, previous, dt)?;
-            for &k in group {
-                let own;
-                let solution = if state.thickness_stretch[k] == previous {
-                    &shared
-                } else {
-                    own = self.solve_layer(k, kin, state.thickness_stretch[k], dt)?;
-                    &own
-                };
-                state.thickness_stretch[k] = solution.lambda3;
-                state.thickness_stretch_rate[k] = solution.rate;
-                let t_k = self.layers[k].thickness;
-                n += solution.s.fixed_view::<2, 2>(0, 0) * t_k;
-                thickness += t_k * solution.lambda3;
-            }
+        self.groups
+            .iter()
+            .try_fold(MembraneResponse::default(), |sum, group| {
+                let part = self.advance_group(group, kin, dt, state)?;
+                Ok(MembraneResponse {
+                    n: sum.n + part.n,
+                    thickness: sum.thickness + part.thickness,
+                })
+            })
+    }
+
+    /// [`Self::membrane_response`] of the layers of one group: they share a law, and a solve
+    /// where they share the state too.
+    fn advance_group(
+        &self,
+        group: &[usize],
+        kin: &MembraneKinematics,
+        dt: f64,
+        state: &mut LaminateState,
+    ) -> Result<MembraneResponse, MaterialError> {
+        let mut response = MembraneResponse::default();
+        let previous = state.thickness_stretch[group[0]];
+        let shared = self.solve_layer(group[0], kin, previous, dt)?;
+        for &k in group {
+            let own;
+            let solution = if state.thickness_stretch[k] == previous {
+                &shared
+            } else {
+                own = self.solve_layer(k, kin, state.thickness_stretch[k], dt)?;
+                &own
+            };
+            state.thickness_stretch[k] = solution.lambda3;
+            state.thickness_stretch_rate[k] = solution.rate;
+            let t_k = self.layers[k].thickness;
+            response.n += solution.s.fixed_view::<2, 2>(0, 0) * t_k;
+            response.thickness += t_k * solution.lambda3;
         }
-        Ok(MembraneResponse { n, thickness })
+        Ok(response)
     }
 
     /// The membrane resultant after a backward-Euler step (docs/solver.md, "Implicit"): the
     /// in-plane `C` reached `dt` after `c_start`, the rate `Cdot = (C - C_start) / dt`, each
     /// layer's thickness advanced from `start`. Returns the response, the advanced state and
-    /// the tangent `D = dN/dE` in the order `(E11, E22, 2 E12)` (N/mm), by central differences
-    /// of the response in `E` **(choice)**: the plane-stress solve of every layer makes an
-    /// analytic tangent long, and six more responses per element cost less than the solve
-    /// they feed (docs/performance.md).
+    /// the tangent `D = dN/dE` in the order `(E11, E22, 2 E12)` (N/mm), from each layer's
+    /// stress derivatives with its thickness stretch following its rule
+    /// ([`Self::layer_tangent`]); by central differences of the response
+    /// ([`Self::differenced_step_tangent`]) for a law that has none.
     pub fn step_tangent(
         &self,
         step: &BackwardEulerStep,
         start: &LaminateState,
     ) -> Result<(MembraneResponse, LaminateState, Matrix3<f64>), MaterialError> {
         let mut state = start.clone();
-        let response = self.membrane_response(&step.kinematics(&step.c), step.dt, &mut state)?;
+        let kin = step.kinematics(&step.c);
+        let response = self.membrane_response(&kin, step.dt, &mut state)?;
+        let d = self.advanced_step_tangent(step, start, &state)?;
+        Ok((response, state, d))
+    }
+
+    /// The tangent of [`Self::step_tangent`] where the step's response is known: `state` is
+    /// `start` advanced over `step`.
+    pub fn advanced_step_tangent(
+        &self,
+        step: &BackwardEulerStep,
+        start: &LaminateState,
+        state: &LaminateState,
+    ) -> Result<Matrix3<f64>, MaterialError> {
+        let kin = step.kinematics(&step.c);
         let mut d = Matrix3::zeros();
-        for (column, unit) in [
-            Matrix2::new(2.0, 0.0, 0.0, 0.0),
-            Matrix2::new(0.0, 0.0, 0.0, 2.0),
-            Matrix2::new(0.0, 1.0, 1.0, 0.0),
-        ]
-        .iter()
-        .enumerate()
-        {
+        for group in &self.groups {
+            d += match self.group_tangent(group, &kin, step.dt, state)? {
+                Some(tangent) => tangent,
+                None => self.differenced_group_tangent(group, step, start)?,
+            };
+        }
+        Ok(d)
+    }
+
+    /// `dN/dE` of one group's layers from [`Self::layer_tangent`], computed once for the
+    /// layers that share a state; `None` if a layer has none.
+    fn group_tangent(
+        &self,
+        group: &[usize],
+        kin: &MembraneKinematics,
+        dt: f64,
+        state: &LaminateState,
+    ) -> Result<Option<Matrix3<f64>>, MaterialError> {
+        let mut d = Matrix3::zeros();
+        let mut last: Option<(usize, Matrix3<f64>)> = None;
+        for &k in group {
+            let shares_state = |j: usize| {
+                state.thickness_stretch[j] == state.thickness_stretch[k]
+                    && state.thickness_stretch_rate[j] == state.thickness_stretch_rate[k]
+            };
+            let tangent = match last.filter(|(j, _)| shares_state(*j)) {
+                Some((_, tangent)) => tangent,
+                None => match self.layer_tangent(k, kin, dt, state)? {
+                    Some(tangent) => tangent,
+                    None => return Ok(None),
+                },
+            };
+            d += tangent * self.layers[k].thickness;
+            last = Some((k, tangent));
+        }
+        Ok(Some(d))
+    }
+
+    /// `dS/dE` of layer `k`'s in-plane stress `(S11, S22, S12)` in `(E11, E22, 2 E12)` (MPa)
+    /// in a state advanced to `kin` (docs/solver.md, "Laminate tangent"): the law's stress
+    /// derivatives along each in-plane strain (its rate `dC / dt` with it) and along the
+    /// thickness stretch (`dC33 = 2 lambda3`, `dCdot33 = 2 rate + 2 lambda3 / dt`), the
+    /// stretch following its rule: `dlambda3 = -dS33 / (dS33/dlambda3)` in plane stress (the
+    /// static condensation of `S33 = 0`), `-lambda3 tr(C2^-1 dC2) / 2` for a layer that keeps
+    /// its volume. `None` where the law has no derivatives or its `S33` does not move with the
+    /// thickness.
+    fn layer_tangent(
+        &self,
+        k: usize,
+        kin: &MembraneKinematics,
+        dt: f64,
+        state: &LaminateState,
+    ) -> Result<Option<Matrix3<f64>>, MaterialError> {
+        let (lambda3, rate) = (state.thickness_stretch[k], state.thickness_stretch_rate[k]);
+        let point = kin.layer_point(lambda3, rate);
+        let per_second = if dt > 0.0 { dt.recip() } else { 0.0 };
+        let in_plane = |c2: Matrix2<f64>| {
+            let mut dc = Matrix3::zeros();
+            dc.fixed_view_mut::<2, 2>(0, 0).copy_from(&c2);
+            (dc, dc * per_second)
+        };
+        let through = |value: f64| Matrix3::from_diagonal(&nalgebra::Vector3::new(0.0, 0.0, value));
+        let thickness_rate_slope = if dt > 0.0 {
+            2.0 * rate + 2.0 * lambda3 / dt
+        } else {
+            0.0
+        };
+        let directions = [
+            in_plane(STRAIN_UNITS[0]),
+            in_plane(STRAIN_UNITS[1]),
+            in_plane(STRAIN_UNITS[2]),
+            (through(2.0 * lambda3), through(thickness_rate_slope)),
+        ];
+        let mut ds = [Matrix3::zeros(); 4];
+        let law = &self.layers[k].law;
+        if !law.stress_derivatives(&point, &directions, &mut ds)? {
+            return Ok(None);
+        }
+        let stretch_change: [f64; 3] = match law.thickness_rule() {
+            ThicknessRule::PlaneStress => {
+                let slope = ds[3][(2, 2)];
+                if !(slope.is_finite() && slope != 0.0) {
+                    return Ok(None);
+                }
+                std::array::from_fn(|j| -ds[j][(2, 2)] / slope)
+            }
+            ThicknessRule::VolumeConserving => {
+                let c2_inv = kin.c.try_inverse().unwrap_or_else(Matrix2::zeros);
+                STRAIN_UNITS.map(|u| -0.5 * lambda3 * (c2_inv * u).trace())
+            }
+        };
+        let columns: [nalgebra::Vector3<f64>; 3] = std::array::from_fn(|j| {
+            let total = ds[j] + ds[3] * stretch_change[j];
+            nalgebra::Vector3::new(total[(0, 0)], total[(1, 1)], total[(0, 1)])
+        });
+        Ok(Some(Matrix3::from_columns(&columns)))
+    }
+
+    /// [`Self::step_tangent`] with every group's tangent by central differences of its
+    /// response in `E` (step [`TANGENT_STEP`]): the reference its derivatives are checked
+    /// against, and the tangent of laws without derivatives.
+    pub fn differenced_step_tangent(
+        &self,
+        step: &BackwardEulerStep,
+        start: &LaminateState,
+    ) -> Result<Matrix3<f64>, MaterialError> {
+        self.groups.iter().try_fold(Matrix3::zeros(), |d, group| {
+            Ok(d + self.differenced_group_tangent(group, step, start)?)
+        })
+    }
+
+    /// `dN/dE` of one group's layers by central differences of their response (step
+    /// [`TANGENT_STEP`]), each probe advanced from `start`.
+    fn differenced_group_tangent(
+        &self,
+        group: &[usize],
+        step: &BackwardEulerStep,
+        start: &LaminateState,
+    ) -> Result<Matrix3<f64>, MaterialError> {
+        let mut d = Matrix3::zeros();
+        for (column, unit) in STRAIN_UNITS.iter().enumerate() {
             let at = |sign: f64| {
                 let c = step.c + unit * (sign * TANGENT_STEP);
                 let mut probe = start.clone();
-                self.membrane_response(&step.kinematics(&c), step.dt, &mut probe)
+                self.advance_group(group, &step.kinematics(&c), step.dt, &mut probe)
                     .map(|r| r.n)
             };
             let difference = (at(1.0)? - at(-1.0)?) / (2.0 * TANGENT_STEP);
@@ -276,7 +426,7 @@ impl Laminate {
                 ),
             );
         }
-        Ok((response, state, d))
+        Ok(d)
     }
 
     /// Thickness-weighted mean of the layers' wave moduli (MPa) in an advanced state: with the

@@ -247,6 +247,39 @@ impl MaterialLaw for ViscoHyperelasticMatrix {
         Ok((s, Some(tangent)))
     }
 
+    /// The directional derivatives of Eqs. (8)–(9) of Gong et al. 2018 (docs/model.md §2,
+    /// "Tangent"). With `c = C^-1`, `a = 2 C10 I3^(-1/3)` and `b = (2/D1)(I3 - sqrt(I3))`, so
+    /// that `S_e = a (I - I1/3 c) + b c`, and `dI1 = tr dC`, `dI3 = I3 tr(c dC)`,
+    /// `dc = -c dC c`:
+    /// `dS_e = -(a/3) tr(c dC) (I - I1/3 c) - (a/3) tr(dC) c + (a I1/3 - b) c dC c
+    /// + (2/D1)(I3 - sqrt(I3)/2) tr(c dC) c`, and
+    /// `dS_v = 2 eta1 (tr(dC) Cdot + (I1 - 3) dCdot)`.
+    fn stress_derivatives(
+        &self,
+        point: &PointKinematics,
+        directions: &[(Matrix3<f64>, Matrix3<f64>)],
+        derivatives: &mut [Matrix3<f64>],
+    ) -> Result<bool, MaterialError> {
+        ensure_finite(self.name(), point)?;
+        let p = self.parameters_at(point.temperature)?;
+        let inv = Invariants::of(&point.c)?;
+        let c_inv = point.c.try_inverse().unwrap_or_else(Matrix3::zeros);
+        let a = 2.0 * p.c10 * inv.i3_pow_minus_third;
+        let b = 2.0 / p.d1 * (inv.i3 - inv.i3.sqrt());
+        let db = 2.0 / p.d1 * (inv.i3 - 0.5 * inv.i3.sqrt());
+        let deviatoric = Matrix3::identity() - c_inv * (inv.i1 / 3.0);
+        for ((dc, dc_dot), ds) in directions.iter().zip(derivatives.iter_mut()) {
+            let c_dc = (c_inv * dc).trace();
+            let tr_dc = dc.trace();
+            let elastic = deviatoric * (-a / 3.0 * c_dc) - c_inv * (a / 3.0 * tr_dc)
+                + c_inv * dc * c_inv * (a * inv.i1 / 3.0 - b)
+                + c_inv * (db * c_dc);
+            let viscous = (point.c_dot * tr_dc + dc_dot * (inv.i1 - 3.0)) * (2.0 * p.eta1);
+            *ds = elastic + viscous;
+        }
+        Ok(true)
+    }
+
     /// Eq. (5) of Gong et al. 2018: `W_e = C10 (I1bar - 3) + (J - 1)^2 / D1`, `I1bar = J^(-2/3)
     /// I1`.
     fn strain_energy(&self, point: &PointKinematics) -> Result<f64, MaterialError> {

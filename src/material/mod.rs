@@ -132,6 +132,20 @@ pub trait MaterialLaw: Debug + Send + Sync {
         Ok((self.second_piola_kirchhoff(point)?, None))
     }
 
+    /// The derivatives of [`MaterialLaw::second_piola_kirchhoff`] along changes of the
+    /// kinematics: for each `(dC, dCdot)` of `directions` (symmetric), `dS = dS/dC : dC +
+    /// dS/dCdot : dCdot` (MPa) into `derivatives`, for the consistent tangent of the implicit
+    /// solver (docs/solver.md, "Implicit"). Returns `false`, with `derivatives` untouched,
+    /// when the law does not provide them: the laminate then differences its response.
+    fn stress_derivatives(
+        &self,
+        _point: &PointKinematics,
+        _directions: &[(Matrix3<f64>, Matrix3<f64>)],
+        _derivatives: &mut [Matrix3<f64>],
+    ) -> Result<bool, MaterialError> {
+        Ok(false)
+    }
+
     /// Stored (hyperelastic) energy per unit reference volume (MPa); `S_e = 2 dW/dC`.
     fn strain_energy(&self, point: &PointKinematics) -> Result<f64, MaterialError>;
 
