@@ -198,11 +198,14 @@ impl MembraneElement {
         k
     }
 
-    /// Tangent stiffness of the hourglass forces ([`Self::hourglass_forces`]) at `x`, by
-    /// central differences of those exact forces (`exact`), or its Gauss–Newton part, positive
+    /// Tangent stiffness of the hourglass forces ([`Self::hourglass_forces`]) at `x`: exact
+    /// (`exact`; docs/solver.md, "Hourglass tangent"), or its Gauss–Newton part, positive
     /// semi-definite: `k_s gamma_a gamma_b (I - n n^T)` for the shear and
     /// `k_y (d(y.q)/dx_a) (d(y.q)/dx_b)^T` for the yarns, the turn of the normal and of the
-    /// yarn left out. Zero for a triangle.
+    /// yarn left out. The yarns' exact part adds `k_y (y.q) d2(y.q)/dx_a dx_b`, with
+    /// `y.q = (u.q)/|u|`, `u = F a0 = sum_a c_a x_a`, whose second derivatives are
+    /// `(3 phi y y^T - phi I - q y^T - y q^T) / |u|^2` in `(u, u)` and `(I - y y^T) / |u|` in
+    /// `(u, q)`. Zero for a triangle.
     pub fn hourglass_stiffness(
         &self,
         x: &[Vector3<f64>],
@@ -213,72 +216,119 @@ impl MembraneElement {
         let Some(hourglass) = &self.hourglass else {
             return k;
         };
-        let corners: Vec<Vector3<f64>> = self.nodes().iter().map(|&n| x[n]).collect();
+        let corners: [Vector3<f64>; 4] = std::array::from_fn(|a| x[self.nodes()[a]]);
         let local = Self {
             cell: Cell::Quad([0, 1, 2, 3]),
             ..self.clone()
         };
-        if exact {
-            let scale = self.area.sqrt();
-            let h = 1e-6 * scale;
-            let forces_at = |y: &[Vector3<f64>]| {
-                let mut f = [Vector3::zeros(); 4];
-                local.hourglass_forces(y, &local.gradient(y), moduli, &mut f);
-                f
-            };
-            for c in 0..4 {
-                for dir in 0..3 {
-                    let mut plus = corners.clone();
-                    let mut minus = corners.clone();
-                    plus[c][dir] += h;
-                    minus[c][dir] -= h;
-                    let (fp, fm) = (forces_at(&plus), forces_at(&minus));
-                    for a in 0..4 {
-                        let column = (fp[a] - fm[a]) / (2.0 * h);
-                        k[a][c].set_column(dir, &column);
-                    }
-                }
-            }
-            return k;
-        }
         let q: Vector3<f64> = corners
             .iter()
             .zip(hourglass.gamma)
             .map(|(x, g)| x * g)
             .sum();
-        let area_vector = 0.5 * (corners[2] - corners[0]).cross(&(corners[3] - corners[1]));
-        let n = area_vector
-            .try_normalize(0.0)
-            .unwrap_or_else(Vector3::zeros);
-        let tangential = Matrix3::identity() - n * n.transpose();
         let k_s = moduli.shear * hourglass.shear_factor;
-        for (row, gamma_a) in k.iter_mut().zip(hourglass.gamma) {
-            for (block, gamma_c) in row.iter_mut().zip(hourglass.gamma) {
-                *block = tangential * (k_s * gamma_a * gamma_c);
+        if exact {
+            self.add_exact_shear_hessian(hourglass, &corners, &q, k_s, &mut k);
+        } else {
+            let area_vector = 0.5 * (corners[2] - corners[0]).cross(&(corners[3] - corners[1]));
+            let n = area_vector
+                .try_normalize(0.0)
+                .unwrap_or_else(Vector3::zeros);
+            let tangential = Matrix3::identity() - n * n.transpose();
+            for (row, gamma_a) in k.iter_mut().zip(hourglass.gamma) {
+                for (block, gamma_c) in row.iter_mut().zip(hourglass.gamma) {
+                    *block = tangential * (k_s * gamma_a * gamma_c);
+                }
             }
         }
         let f_centre = local.gradient(&corners);
         for (k_y, fibre, y, length) in self.hourglass_yarns(hourglass, &f_centre, moduli) {
-            let across = (q - y * y.dot(&q)) / length;
-            let d: Vec<Vector3<f64>> = self
-                .shape_gradients
-                .iter()
-                .zip(hourglass.gamma)
-                .map(|(g, gamma)| y * gamma + across * g.dot(&fibre.xy()))
-                .collect();
+            let y_q = y.dot(&q);
+            let across = (q - y * y_q) / length;
+            let c: [f64; 4] = std::array::from_fn(|a| self.shape_gradients[a].dot(&fibre.xy()));
+            let d: [Vector3<f64>; 4] =
+                std::array::from_fn(|a| y * hourglass.gamma[a] + across * c[a]);
+            // phi = y . q = (u . q) / |u| with u = F a0 = sum_a c_a x_a: its second
+            // derivatives in (u, u) and (u, q); none in (q, q)
+            let (uu, uq) = if exact {
+                let projector = Matrix3::identity() - y * y.transpose();
+                let uu = (-(q * y.transpose() + y * q.transpose()) - Matrix3::identity() * y_q
+                    + y * y.transpose() * (3.0 * y_q))
+                    / (length * length);
+                (uu, projector / length)
+            } else {
+                (Matrix3::zeros(), Matrix3::zeros())
+            };
             for a in 0..4 {
-                for c in 0..4 {
-                    k[a][c] += d[a] * d[c].transpose() * k_y;
+                for b in 0..4 {
+                    let curvature = uu * (c[a] * c[b])
+                        + uq * (c[a] * hourglass.gamma[b] + hourglass.gamma[a] * c[b]);
+                    k[a][b] += (d[a] * d[b].transpose() + curvature * y_q) * k_y;
                 }
             }
         }
         k
     }
 
-    /// The hourglass forces `dW/dx_a` of a quadrilateral at the positions `x` (`f` its centre
-    /// gradient there, as the element loop has it), added to
-    /// `forces`, the turn of the tangent plane and of the yarns with `x` included (the forces
-    /// are exactly those of the energy); returns the mode's energy. Nothing for a triangle.
+    /// The exact Hessian of the hourglass shear energy `1/2 k_s (|q|^2 - psi^2)`,
+    /// `psi = n . q = (N . q) / |N|`, `N = (x2 - x0) x (x3 - x1) / 2` (docs/solver.md,
+    /// "Hourglass tangent"): `k_s (gamma_a gamma_b I - dpsi_a dpsi_b^T - psi d2psi_ab)`, with
+    /// `dpsi_a = gamma_a n + A_a^T v` (`A_a = dN/dx_a`, `v = (I - n n^T) q / |N|`) and
+    /// `d2psi_ab = gamma_a P A_b / |N| + A_a^T P gamma_b / |N| + A_a^T H_NN A_b + v . d2N_ab`,
+    /// `H_NN = (3 psi n n^T - psi I - q n^T - n q^T) / |N|^2`.
+    fn add_exact_shear_hessian(
+        &self,
+        hourglass: &Hourglass,
+        corners: &[Vector3<f64>; 4],
+        q: &Vector3<f64>,
+        k_s: f64,
+        k: &mut [[Matrix3<f64>; 4]; 4],
+    ) {
+        let gamma = hourglass.gamma;
+        let (d1, d2) = (corners[2] - corners[0], corners[3] - corners[1]);
+        let area_vector = 0.5 * d1.cross(&d2);
+        let size = area_vector.norm();
+        let Some(n) = area_vector.try_normalize(0.0) else {
+            for a in 0..4 {
+                for b in 0..4 {
+                    k[a][b] += Matrix3::identity() * (k_s * gamma[a] * gamma[b]);
+                }
+            }
+            return;
+        };
+        let psi = n.dot(q);
+        let projector = Matrix3::identity() - n * n.transpose();
+        let v = projector * q / size;
+        // dN/dx_a: d1 = x2 - x0, d2 = x3 - x1, dN = (dd1 x d2 + d1 x dd2) / 2
+        let half_d1 = d1.cross_matrix() * 0.5;
+        let half_d2 = d2.cross_matrix() * 0.5;
+        let a_of = [half_d2, -half_d1, -half_d2, half_d1];
+        let h_nn = (n * n.transpose() * (3.0 * psi)
+            - Matrix3::identity() * psi
+            - q * n.transpose()
+            - n * q.transpose())
+            / (size * size);
+        // v . d2N / dd1 dd2 = -[v]x / 2, and its transpose for (d2, d1)
+        let m12 = -v.cross_matrix() * 0.5;
+        let (s1, s2) = ([-1.0, 0.0, 1.0, 0.0], [0.0, -1.0, 0.0, 1.0]);
+        let dpsi: [Vector3<f64>; 4] =
+            std::array::from_fn(|a| n * gamma[a] + a_of[a].transpose() * v);
+        let p_over = projector / size;
+        for a in 0..4 {
+            for b in 0..4 {
+                let d2psi = p_over * a_of[b] * gamma[a]
+                    + a_of[a].transpose() * p_over * gamma[b]
+                    + a_of[a].transpose() * h_nn * a_of[b]
+                    + m12 * (s1[a] * s2[b])
+                    + m12.transpose() * (s2[a] * s1[b]);
+                k[a][b] += (Matrix3::identity() * (gamma[a] * gamma[b])
+                    - dpsi[a] * dpsi[b].transpose()
+                    - d2psi * psi)
+                    * k_s;
+            }
+        }
+    }
+
     pub fn hourglass_forces(
         &self,
         x: &[Vector3<f64>],
@@ -633,6 +683,67 @@ mod tests {
                     forces[a][axis]
                 );
             }
+        }
+    }
+
+    /// The exact hourglass tangent is the derivative of the hourglass forces (central
+    /// differences): on a square with the yarns along its edges (shear and yarns) and on a
+    /// distorted cell with the yarns at 30° (shear only), each moved out of shape, warped and
+    /// given a large hourglass; its Gauss–Newton part is not.
+    #[test]
+    fn exact_hourglass_stiffness_is_the_derivative_of_the_forces() {
+        let square = vec![
+            Vector3::new(0.0, 0.0, 0.0),
+            Vector3::new(2.0, 0.0, 0.0),
+            Vector3::new(2.0, 2.0, 0.0),
+            Vector3::new(0.0, 2.0, 0.0),
+        ];
+        for (x0, warp) in [
+            (square, Vector3::x()),
+            (distorted_quad(), Vector3::new(0.866, 0.5, 0.0)),
+        ] {
+            let e = MembraneElement::new(Cell::Quad([0, 1, 2, 3]), &x0, &warp).unwrap();
+            let x: Vec<_> = x0
+                .iter()
+                .enumerate()
+                .map(|(a, p)| {
+                    let s = a as f64;
+                    // the hourglass pattern (1, -1, 1, -1) in the plane, and more
+                    let hourglass = if a % 2 == 0 { 0.3 } else { -0.3 };
+                    p + Vector3::new(
+                        hourglass + 0.3 * s.sin(),
+                        0.2 * (1.7 * s).cos() - hourglass,
+                        0.4 * (2.3 * s).sin(),
+                    )
+                })
+                .collect();
+            let exact = e.hourglass_stiffness(&x, &MODULI, true);
+            let gauss_newton = e.hourglass_stiffness(&x, &MODULI, false);
+            let h = 1e-6;
+            let (mut largest, mut error, mut gn_error) = (0.0f64, 0.0f64, 0.0f64);
+            for c in 0..4 {
+                for dir in 0..3 {
+                    let force_at = |sign: f64| {
+                        let mut y = x.clone();
+                        y[c][dir] += sign * h;
+                        let mut f = [Vector3::zeros(); 4];
+                        e.hourglass_forces(&y, &e.gradient(&y), &MODULI, &mut f);
+                        f
+                    };
+                    let (plus, minus) = (force_at(1.0), force_at(-1.0));
+                    for a in 0..4 {
+                        let column = (plus[a] - minus[a]) / (2.0 * h);
+                        largest = largest.max(column.amax());
+                        error = error.max((column - exact[a][c].column(dir)).amax());
+                        gn_error = gn_error.max((column - gauss_newton[a][c].column(dir)).amax());
+                    }
+                }
+            }
+            assert!(error < 1e-7 * largest, "{warp}: {error} of {largest}");
+            assert!(
+                gn_error > 1e-2 * largest,
+                "{warp}: Gauss-Newton off by {gn_error}"
+            );
         }
     }
 
