@@ -93,6 +93,7 @@ fn main() {
             positions: &positions,
             translations: &pressed.tool_translations,
             engaged: None,
+            near: None,
         };
         let budget = Duration::from_secs(3);
         let tangent = per_call(budget, || {

@@ -56,23 +56,47 @@ pub fn penalty_stiffness(scale: f64, wave_stiffness: f64, area: f64, size: f64) 
     scale * wave_stiffness * area / (size * size)
 }
 
-/// The potential of a node at `y` (relative to the tool's translation) against `tool`, with
-/// contact spring `stiffness` and friction lagged in `friction` (regularised over `slip`, mm).
-/// `engaged`: `Some(true)` holds the spring on even where the node has left the margin (then it
-/// pulls), as Newton's method does when it freezes the contact set to stop a node chattering
-/// in and out of contact; otherwise the gap decides.
-/// `exact`: the Hessian of the normal part with the turn of the normal over the tool's edges
-/// and corners ([`normal_hessian`]); otherwise `Pi''(g) n n^T`, its positive semi-definite
-/// part. `None` when the node neither touches the tool nor rubs on it.
+/// How a pair's contact is evaluated: the regularising slip of friction (mm), which Hessian,
+/// and whether Newton's method has frozen the pair's spring on or off.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PairOptions {
+    pub slip: f64,
+    pub hessian: PairHessian,
+    /// `Some(true)` holds the spring on even where the node has left the margin (then it
+    /// pulls), as Newton's method does when it freezes the contact set to stop a node
+    /// chattering in and out of contact; otherwise the gap decides.
+    pub engaged: Option<bool>,
+}
+
+/// Which second derivative of a pair's potential is formed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PairHessian {
+    /// None: the residual alone (a line-search probe).
+    None,
+    /// `Pi''(g) n n^T` for the normal part, its positive semi-definite part.
+    GaussNewton,
+    /// With the turn of the normal over the tool's edges and corners ([`normal_hessian`]).
+    Exact,
+}
+
+/// The potential of a node at `y` (relative to the tool's translation) against `tool`, whose
+/// point nearest to `y` within the search radius is `nearest` ([`RigidTool::nearest`]), with
+/// contact spring `stiffness` and friction lagged in `friction`. `None` when the node neither
+/// touches the tool nor rubs on it.
 pub fn pair_contact(
     tool: &RigidTool,
     y: &Vector3<f64>,
+    nearest: Option<Projection>,
     stiffness: f64,
     settings: &ContactSettings,
     friction: Option<&FrictionLag>,
-    (slip, exact, engaged): (f64, bool, Option<bool>),
+    options: PairOptions,
 ) -> Option<PairContact> {
-    let nearest = tool.nearest(y);
+    let PairOptions {
+        slip,
+        hessian,
+        engaged,
+    } = options;
     let normal = nearest.and_then(|p| normal_part(p, y, stiffness, settings, engaged));
     let rub = friction.filter(|f| f.limit > 0.0);
     if normal.is_none() && rub.is_none() {
@@ -87,10 +111,10 @@ pub fn pair_contact(
         pair.gradient = gradient;
         pair.normal = n;
         pair.normal_force = force;
-        pair.hessian = if exact {
-            normal_hessian(tool, p, y, stiffness, settings)
-        } else {
-            n * n.transpose() * curvature
+        pair.hessian = match hessian {
+            PairHessian::None => Matrix3::zeros(),
+            PairHessian::GaussNewton => n * n.transpose() * curvature,
+            PairHessian::Exact => normal_hessian(tool, p, y, stiffness, settings),
         };
     }
     if let Some(f) = rub {
@@ -101,10 +125,12 @@ pub fn pair_contact(
         let g = s * (f.limit / rho);
         pair.gradient += g;
         pair.tangential = -g;
-        pair.hessian += projector
-            * (Matrix3::identity() / rho - s * s.transpose() / (rho * rho * rho))
-            * projector
-            * f.limit;
+        if hessian != PairHessian::None {
+            pair.hessian += projector
+                * (Matrix3::identity() / rho - s * s.transpose() / (rho * rho * rho))
+                * projector
+                * f.limit;
+        }
     }
     Some(pair)
 }
@@ -184,6 +210,14 @@ mod tests {
         RigidTool::new("punch", surface, ToolMotion::Fixed, 0.3, 1.0).unwrap()
     }
 
+    fn options(slip: f64, hessian: PairHessian) -> PairOptions {
+        PairOptions {
+            slip,
+            hessian,
+            engaged: None,
+        }
+    }
+
     const SETTINGS: ContactSettings = ContactSettings {
         offset: 0.25,
         penalty_scale: 0.1,
@@ -214,7 +248,16 @@ mod tests {
         assert!(matches!(features[2], Feature::Vertex), "{features:?}");
         for (k, &y) in points.iter().enumerate() {
             let at = |z: Vector3<f64>| {
-                pair_contact(&tool, &z, 500.0, &SETTINGS, Some(&lag), (0.01, true, None)).unwrap()
+                pair_contact(
+                    &tool,
+                    &z,
+                    tool.nearest(&z),
+                    500.0,
+                    &SETTINGS,
+                    Some(&lag),
+                    options(0.01, PairHessian::Exact),
+                )
+                .unwrap()
             };
             let pair = at(y);
             assert!(pair.normal_force > 0.0, "{k}: touching");
@@ -249,7 +292,16 @@ mod tests {
             let p = tool.nearest(&y).unwrap();
             let (n, distance) = p.direction_to(&y);
             let gap = distance - SETTINGS.offset - margin;
-            let pair = pair_contact(&tool, &y, k, &SETTINGS, None, (0.01, false, None)).unwrap();
+            let pair = pair_contact(
+                &tool,
+                &y,
+                Some(p),
+                k,
+                &SETTINGS,
+                None,
+                options(0.01, PairHessian::GaussNewton),
+            )
+            .unwrap();
             assert!((pair.normal_force + k * gap).abs() < 1e-9, "{depth}");
             assert!((pair.gradient - n * (k * gap)).norm() < 1e-9, "{depth}");
             assert_eq!(pair.tunnelled, gap <= -SETTINGS.max_penetration, "{depth}");
@@ -266,17 +318,26 @@ mod tests {
             start: Vector3::new(0.0, 0.0, 0.2),
         };
         let y = Vector3::new(1.0, 0.0, 0.2);
-        let pair =
-            pair_contact(&tool, &y, 500.0, &SETTINGS, Some(&lag), (1e-3, false, None)).unwrap();
+        let pair = pair_contact(
+            &tool,
+            &y,
+            tool.nearest(&y),
+            500.0,
+            &SETTINGS,
+            Some(&lag),
+            options(1e-3, PairHessian::GaussNewton),
+        )
+        .unwrap();
         assert!((pair.tangential + Vector3::x() * 2.0).norm() < 2.0 * 1e-6);
         let stuck = Vector3::new(1e-5, 0.0, 0.2);
         let pair = pair_contact(
             &tool,
             &stuck,
+            tool.nearest(&stuck),
             500.0,
             &SETTINGS,
             Some(&lag),
-            (1e-3, false, None),
+            options(1e-3, PairHessian::GaussNewton),
         )
         .unwrap();
         assert!(pair.tangential.norm() < 0.02 * 2.0, "sticks below eps");

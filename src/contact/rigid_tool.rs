@@ -146,6 +146,26 @@ impl RigidTool {
     /// [`Self::nearest`] for a node that keeps its list of near triangles between calls: the
     /// list is made again only when the node has moved `margin` since it was made.
     pub fn nearest_listed(&self, p: &Vector3<f64>, near: &mut NearTriangles) -> Option<Projection> {
+        self.refresh_near_list(p, near);
+        self.nearest_among(p, &near.triangles)
+    }
+
+    /// [`Self::nearest`] from a list of near triangles made earlier ([`Self::near_list`]) when
+    /// `p` is within its margin of where it was made, by the grid otherwise: the same
+    /// triangles are looked at either way, the list's are fewer.
+    pub fn nearest_kept(&self, p: &Vector3<f64>, near: &NearTriangles) -> Option<Projection> {
+        let margin = list_margin(self.search_radius);
+        match near.anchor {
+            Some(a) if (p - a).norm_squared() < margin * margin => {
+                self.nearest_among(p, &near.triangles)
+            }
+            _ => self.nearest(p),
+        }
+    }
+
+    /// Makes `near` the list of the triangles near `p`, unless it was made within its margin
+    /// of `p` and still serves there.
+    pub fn refresh_near_list(&self, p: &Vector3<f64>, near: &mut NearTriangles) {
         let margin = list_margin(self.search_radius);
         if near
             .anchor
@@ -153,7 +173,6 @@ impl RigidTool {
         {
             self.list_near_triangles(p, near);
         }
-        self.nearest_among(p, &near.triangles)
     }
 
     fn list_near_triangles(&self, p: &Vector3<f64>, near: &mut NearTriangles) {

@@ -6,13 +6,14 @@
 //! Elements and patches are evaluated in parallel in chunks of fixed size and their entries
 //! added in element order, so the sums do not depend on the thread count.
 
-use super::linear::Pattern;
-use crate::contact::potential::{pair_contact, FrictionLag, PairContact};
-use crate::contact::{NodeContact, ToolLoad, ToolMotion};
+use super::linear::{minimum_degree, nested_dissection, Pattern};
+use crate::contact::potential::{pair_contact, FrictionLag, PairContact, PairHessian, PairOptions};
+use crate::contact::Projection;
+use crate::contact::{NearTriangles, NodeContact, ToolLoad, ToolMotion};
 use crate::material::laminate::BackwardEulerStep;
 use crate::material::{LaminateState, MaterialError, MembraneResponse};
 use crate::solver::model::{Model, Motion};
-use nalgebra::{DMatrix, Matrix2, Matrix3, SymmetricEigen, Vector3};
+use nalgebra::{DMatrix, Matrix2, Matrix3, Matrix3x2, SymmetricEigen, Vector3};
 use rayon::prelude::*;
 
 /// Elements (or patches) per parallel chunk; fixed, so that sums do not depend on the threads.
@@ -101,7 +102,8 @@ impl Layout {
                 groups.push(vec![3 * n, 3 * n + 1, 3 * n + 2, *unknown]);
             }
         }
-        let pattern = Pattern::from_groups(size, groups.iter().map(|g| &g[..]));
+        let order = elimination_order(model, nodes, &element_nodes, &patch_nodes, size);
+        let pattern = Pattern::from_groups_in_order(size, groups.iter().map(|g| &g[..]), order);
         let scatter = |nodes: &Vec<usize>| Scatter::new(&pattern, &held, nodes);
         let elements = element_nodes.iter().map(scatter).collect();
         let patches = patch_nodes.iter().map(scatter).collect();
@@ -124,6 +126,65 @@ impl Layout {
             diagonal,
         }
     }
+}
+
+/// The order in which the factorisation eliminates the unknowns: node by node (a node's
+/// three coordinates together), the nodes by approximate minimum degree or by geometric
+/// nested dissection of the reference mesh, whichever gives the sparser factor (minimum
+/// degree on small sheets; dissection from a few thousand nodes on, where its separators pay
+/// off), then the tools' travel, coupled with every node.
+fn elimination_order(
+    model: &Model,
+    nodes: usize,
+    element_nodes: &[Vec<usize>],
+    patch_nodes: &[Vec<usize>],
+    size: usize,
+) -> Vec<usize> {
+    let mut neighbours = vec![Vec::new(); nodes];
+    for group in element_nodes.iter().chain(patch_nodes) {
+        for &a in group {
+            neighbours[a].extend(group.iter().copied().filter(|&b| b != a));
+        }
+    }
+    for around in &mut neighbours {
+        around.sort_unstable();
+        around.dedup();
+    }
+    let points: Vec<[f64; 3]> = model.mesh.nodes.iter().map(|p| [p.x, p.y, p.z]).collect();
+    let expand = |node_order: Vec<usize>| -> Vec<usize> {
+        let mut order: Vec<usize> = node_order
+            .iter()
+            .flat_map(|&n| [3 * n, 3 * n + 1, 3 * n + 2])
+            .collect();
+        order.extend(3 * nodes..size);
+        order
+    };
+    let node_groups: Vec<Vec<usize>> = (0..nodes)
+        .map(|n| {
+            std::iter::once(n)
+                .chain(neighbours[n].iter().copied())
+                .collect()
+        })
+        .collect();
+    let candidates = [
+        minimum_degree(&neighbours).ok(),
+        Some(nested_dissection(&points, &neighbours)),
+    ];
+    candidates
+        .into_iter()
+        .flatten()
+        .map(|node_order| {
+            let entries = Pattern::from_groups_in_order(
+                nodes,
+                node_groups.iter().map(|g| &g[..]),
+                node_order.clone(),
+            )
+            .factor_entries()
+            .unwrap_or(usize::MAX);
+            (entries, node_order)
+        })
+        .min_by_key(|(entries, _)| *entries)
+        .map_or_else(|| (0..size).collect(), |(_, node_order)| expand(node_order))
 }
 
 /// The start of the increment: what the trial configuration is measured from.
@@ -157,6 +218,42 @@ pub struct Trial<'a> {
     pub positions: &'a [Vector3<f64>],
     pub translations: &'a [Vector3<f64>],
     pub engaged: Option<&'a [Vec<bool>]>,
+    /// Lists of the triangles near each node made at a nearby configuration
+    /// (`[node * tools + tool]`, [`NearLists`]), which the contact search reads instead of the
+    /// tools' grids where the node is still within their margin.
+    pub near: Option<&'a [NearTriangles]>,
+}
+
+/// The lists of near triangles of every node and tool (`[node * tools + tool]`), kept by
+/// Newton's method between iterations and increments and made again for a node once it has
+/// moved past their margin ([`RigidTool::refresh_near_list`]).
+#[derive(Clone, Debug, Default)]
+pub struct NearLists(Vec<NearTriangles>);
+
+impl NearLists {
+    /// Lists that serve at `positions` (tools at `translations`).
+    pub fn refresh(
+        &mut self,
+        model: &Model,
+        positions: &[Vector3<f64>],
+        translations: &[Vector3<f64>],
+    ) {
+        let tools = model.tools.len();
+        self.0
+            .resize(positions.len() * tools, NearTriangles::default());
+        self.0
+            .par_chunks_mut(tools.max(1))
+            .zip(positions)
+            .for_each(|(lists, x)| {
+                for (k, near) in lists.iter_mut().enumerate() {
+                    model.tools[k].refresh_near_list(&(x - translations[k]), near);
+                }
+            });
+    }
+
+    pub fn lists(&self) -> &[NearTriangles] {
+        &self.0
+    }
 }
 
 /// Everything evaluated at a trial configuration.
@@ -172,6 +269,9 @@ pub struct Evaluation {
     pub states: Vec<LaminateState>,
     pub contacts: Vec<NodeContact>,
     pub loads: Vec<ToolLoad>,
+    /// Each tool's point nearest to each node within the search radius
+    /// (`[node * tools + tool]`), where the tangent at this trial reads it.
+    pub nearest: Vec<Option<Projection>>,
     /// Work of the stabilising drag over the increment so far, `sum c |x - x_n|^2` (N·mm).
     pub drag_work: f64,
     /// The incremental potential `Pi` (N·mm) whose gradient is the residual.
@@ -194,29 +294,45 @@ pub struct Evaluator<'a> {
     pub slip_rate: f64,
 }
 
-/// One bending patch's forces on its nodes, its stiffness when asked for, and its energy.
-type PatchShare = (Vec<Vector3<f64>>, Option<DMatrix<f64>>, f64);
-
-/// One element's share.
+/// One element's share of the residual.
 struct ElementShare {
     forces: [Vector3<f64>; 4],
     potential: f64,
-    stiffness: Option<[[Matrix3<f64>; 4]; 4]>,
     response: MembraneResponse,
     state: LaminateState,
 }
 
+/// One element's stiffness, in 3x3 blocks of its nodes.
+type ElementBlocks = [[Matrix3<f64>; 4]; 4];
+
 impl Evaluator<'_> {
+    /// The residual at `trial` and, unless `tangent` is [`Tangent::None`], the tangent there.
     pub fn evaluate(
         &self,
         start: &IncrementStart,
         trial: &Trial,
         tangent: Tangent,
     ) -> Result<Evaluation, (usize, MaterialError)> {
+        let mut evaluation = self.residual(start, trial)?;
+        if tangent != Tangent::None {
+            let mut values = Vec::new();
+            self.tangent(start, trial, &evaluation, tangent, &mut values)?;
+            evaluation.matrix = Some(values);
+        }
+        Ok(evaluation)
+    }
+
+    /// The residual, forces, contacts and potential at `trial`, without the tangent: what a
+    /// line-search probe needs, and what [`Self::tangent`] builds on where Newton's method
+    /// goes on from it.
+    pub fn residual(
+        &self,
+        start: &IncrementStart,
+        trial: &Trial,
+    ) -> Result<Evaluation, (usize, MaterialError)> {
         let model = self.model;
         let layout = self.layout;
         let mut residual = vec![0.0; layout.size];
-        let mut matrix = (tangent != Tangent::None).then(|| vec![0.0; layout.pattern.entries()]);
         let mut internal = vec![Vector3::zeros(); layout.nodes];
         let mut potential = 0.0;
         let mut responses = Vec::with_capacity(model.elements.len());
@@ -227,8 +343,7 @@ impl Evaluator<'_> {
                 .enumerate()
                 .map(|(i, _)| {
                     let k = c * CHUNK + i;
-                    self.element(k, start, trial.positions, tangent)
-                        .map_err(|e| (k, e))
+                    self.element(k, start, trial.positions).map_err(|e| (k, e))
                 })
                 .collect();
             for (i, share) in shares.into_iter().enumerate() {
@@ -238,41 +353,25 @@ impl Evaluator<'_> {
                 for (a, &n) in scatter.nodes.iter().enumerate() {
                     internal[n] += share.forces[a];
                 }
-                if let (Some(values), Some(k)) = (matrix.as_mut(), &share.stiffness) {
-                    scatter.add(&layout.held, values, |a, b| k[a][b]);
-                }
                 responses.push(share.response);
                 states.push(share.state);
             }
         }
         if let Some(bending) = &model.bending {
-            let exact = self.exact;
             for (c, chunk) in bending.patches.chunks(CHUNK).enumerate() {
-                let shares: Vec<PatchShare> = chunk
+                let shares: Vec<(Vec<Vector3<f64>>, f64)> = chunk
                     .par_iter()
                     .map(|patch| {
                         let mut f = vec![Vector3::zeros(); patch.nodes.len()];
                         let energy = bending.forces(patch, trial.positions, &mut f);
-                        let k = (tangent != Tangent::None).then(|| {
-                            bending.stiffness(
-                                patch,
-                                trial.positions,
-                                exact && tangent == Tangent::Consistent,
-                            )
-                        });
-                        (f, k, energy)
+                        (f, energy)
                     })
                     .collect();
-                for (i, (f, k, energy)) in shares.into_iter().enumerate() {
+                for (i, (f, energy)) in shares.into_iter().enumerate() {
                     potential += energy;
                     let scatter = &layout.patches[c * CHUNK + i];
                     for (a, &n) in scatter.nodes.iter().enumerate() {
                         internal[n] += f[a];
-                    }
-                    if let (Some(values), Some(k)) = (matrix.as_mut(), k) {
-                        scatter.add(&layout.held, values, |a, b| {
-                            k.fixed_view::<3, 3>(3 * a, 3 * b).into_owned()
-                        });
                     }
                 }
             }
@@ -282,9 +381,8 @@ impl Evaluator<'_> {
                 residual[3 * n + d] += f[d];
             }
         }
-        let (contacts, loads, contact_energy, tunnelled) =
-            self.contact(start, trial, tangent, &mut residual, matrix.as_mut());
-        potential += contact_energy;
+        let contact = self.contact(start, trial, &mut residual);
+        potential += contact.energy;
         let mut drag_work = 0.0;
         for n in 0..layout.nodes {
             let travel = trial.positions[n] - start.positions[n];
@@ -294,201 +392,329 @@ impl Evaluator<'_> {
             for d in 0..3 {
                 residual[3 * n + d] += c * travel[d];
             }
-            if let Some(values) = matrix.as_mut() {
-                layout.diagonal[n].add(&layout.held, values, |_, _| Matrix3::identity() * c);
-            }
         }
         for (k, unknown) in layout.tool_unknown.iter().enumerate() {
             if let (Some(u), Some((axis, force))) = (unknown, layout.tool_force[k]) {
                 residual[*u] -= force;
                 potential -= force * trial.translations[k].dot(&axis);
-                if let Some(values) = matrix.as_mut() {
-                    values[layout.pattern.place(*u, *u).expect("tool diagonal")] +=
-                        layout.tool_drag;
-                }
-            }
-        }
-        if let Some(values) = matrix.as_mut() {
-            for (i, &held) in layout.held.iter().enumerate() {
-                if held {
-                    values[layout.pattern.place(i, i).expect("diagonal")] = 1.0;
-                }
             }
         }
         Ok(Evaluation {
             residual,
-            matrix,
+            matrix: None,
             internal,
             responses,
             states,
-            contacts,
-            loads,
+            contacts: contact.contacts,
+            loads: contact.loads,
+            nearest: contact.nearest,
             drag_work,
             potential,
-            tunnelled,
+            tunnelled: contact.tunnelled,
         })
     }
 
-    /// Forces and tangent of element `k`.
+    /// The lower triangle of the tangent of kind `kind` (not [`Tangent::None`]) at `trial`
+    /// into `values` (a buffer kept by the caller: allocated anew, the tangent of a large
+    /// sheet was page-faulted in at every iteration), whose residual is `evaluation`
+    /// ([`Self::residual`]): the elements' responses and laminate states and the tools'
+    /// nearest points are taken from it; held rows and columns are the identity.
+    pub fn tangent(
+        &self,
+        start: &IncrementStart,
+        trial: &Trial,
+        evaluation: &Evaluation,
+        kind: Tangent,
+        values: &mut Vec<f64>,
+    ) -> Result<(), (usize, MaterialError)> {
+        let model = self.model;
+        let layout = self.layout;
+        let exact = self.exact && kind == Tangent::Consistent;
+        values.clear();
+        values.resize(layout.pattern.entries(), 0.0);
+        let values = values.as_mut_slice();
+        for (c, chunk) in model.elements.chunks(CHUNK).enumerate() {
+            let blocks: Vec<Result<ElementBlocks, (usize, MaterialError)>> = chunk
+                .par_iter()
+                .enumerate()
+                .map(|(i, _)| {
+                    let k = c * CHUNK + i;
+                    let at = (&evaluation.responses[k], &evaluation.states[k]);
+                    self.element_stiffness(k, start, trial.positions, at, kind)
+                        .map_err(|e| (k, e))
+                })
+                .collect();
+            for (i, k) in blocks.into_iter().enumerate() {
+                let k = k?;
+                layout.elements[c * CHUNK + i].add(&layout.held, values, |a, b| k[a][b]);
+            }
+        }
+        if let Some(bending) = &model.bending {
+            for (c, chunk) in bending.patches.chunks(CHUNK).enumerate() {
+                let blocks: Vec<DMatrix<f64>> = chunk
+                    .par_iter()
+                    .map(|patch| bending.stiffness(patch, trial.positions, exact))
+                    .collect();
+                for (i, k) in blocks.into_iter().enumerate() {
+                    layout.patches[c * CHUNK + i].add(&layout.held, values, |a, b| {
+                        k.fixed_view::<3, 3>(3 * a, 3 * b).into_owned()
+                    });
+                }
+            }
+        }
+        self.contact_tangent(start, trial, evaluation, kind, values);
+        for n in 0..layout.nodes {
+            let c = layout.drag[n];
+            layout.diagonal[n].add(&layout.held, values, |_, _| Matrix3::identity() * c);
+        }
+        for u in layout.tool_unknown.iter().flatten() {
+            values[layout.pattern.place(*u, *u).expect("tool diagonal")] += layout.tool_drag;
+        }
+        for (i, &held) in layout.held.iter().enumerate() {
+            if held {
+                values[layout.pattern.place(i, i).expect("diagonal")] = 1.0;
+            }
+        }
+        Ok(())
+    }
+
+    /// Forces, potential and response of element `k`.
     fn element(
         &self,
         k: usize,
         start: &IncrementStart,
         x: &[Vector3<f64>],
-        tangent: Tangent,
     ) -> Result<ElementShare, MaterialError> {
         let model = self.model;
         let e = &model.elements[k];
         let f = e.gradient(x);
-        let step = BackwardEulerStep {
-            c: f.transpose() * f,
-            c_start: start.strains[k],
-            dt: start.dt,
-            temperature: model.temperature,
-            fibres: e.fibres,
-        };
+        let step = self.step(k, start, &f);
         let laminate = &model.laminate;
-        let (response, state, d) = match tangent {
-            Tangent::None => {
-                let mut state = start.laminate_states[k].clone();
-                let r =
-                    laminate.membrane_response(&step.kinematics(&step.c), step.dt, &mut state)?;
-                (r, state, None)
-            }
-            _ => {
-                let (r, state, d) = laminate.step_tangent(&step, &start.laminate_states[k])?;
-                (r, state, Some(0.5 * (d + d.transpose())))
-            }
-        };
+        let mut state = start.laminate_states[k].clone();
+        let kin = step.kinematics(&step.c);
+        let response = laminate.membrane_response(&kin, step.dt, &mut state)?;
         let mut forces = e.internal_forces(&f, &response.n);
         let hourglass = e.hourglass_forces(x, &f, &model.hourglass, &mut forces);
-        let potential = e.area
-            * laminate.incremental_potential(&step.kinematics(&step.c), &state, step.dt)?
-            + hourglass;
-        let stiffness = d.map(|d| {
-            let (d, n) = match tangent {
-                Tangent::Projected => (positive_part3(&d), positive_part2(&response.n)),
-                _ => (d, response.n),
-            };
-            let mut k = e.stiffness(&f, &n, &d);
-            if e.hourglass.is_some() {
-                let exact = self.exact && tangent == Tangent::Consistent;
-                let h = e.hourglass_stiffness(x, &model.hourglass, exact);
-                for a in 0..4 {
-                    for b in 0..4 {
-                        k[a][b] += h[a][b];
-                    }
-                }
-            }
-            k
-        });
+        let potential = e.area * laminate.incremental_potential(&kin, &state, step.dt)? + hourglass;
         Ok(ElementShare {
             forces,
             potential,
-            stiffness,
             response,
             state,
         })
     }
 
-    /// Contact and friction of every node with every tool: adds to the residual and matrix,
-    /// returns each node's contact, each tool's load, the pairs' energy and how many tunnelled.
-    fn contact(
+    /// The backward-Euler step of element `k` from the increment's start to the deformation
+    /// gradient `f`.
+    fn step(&self, k: usize, start: &IncrementStart, f: &Matrix3x2<f64>) -> BackwardEulerStep {
+        let e = &self.model.elements[k];
+        BackwardEulerStep {
+            c: f.transpose() * f,
+            c_start: start.strains[k],
+            dt: start.dt,
+            temperature: self.model.temperature,
+            fibres: e.fibres,
+        }
+    }
+
+    /// The stiffness blocks of element `k` at `x`, where its response and advanced laminate
+    /// state are `(response, state)`.
+    fn element_stiffness(
         &self,
+        k: usize,
+        start: &IncrementStart,
+        x: &[Vector3<f64>],
+        (response, state): (&MembraneResponse, &LaminateState),
+        kind: Tangent,
+    ) -> Result<ElementBlocks, MaterialError> {
+        let model = self.model;
+        let e = &model.elements[k];
+        let f = e.gradient(x);
+        let step = self.step(k, start, &f);
+        let d = model
+            .laminate
+            .advanced_step_tangent(&step, &start.laminate_states[k], state)?;
+        let d = 0.5 * (d + d.transpose());
+        let (d, n) = match kind {
+            Tangent::Projected => (positive_part3(&d), positive_part2(&response.n)),
+            _ => (d, response.n),
+        };
+        let mut blocks = e.stiffness(&f, &n, &d);
+        if e.hourglass.is_some() {
+            let exact = self.exact && kind == Tangent::Consistent;
+            let h = e.hourglass_stiffness(x, &model.hourglass, exact);
+            for a in 0..4 {
+                for b in 0..4 {
+                    blocks[a][b] += h[a][b];
+                }
+            }
+        }
+        Ok(blocks)
+    }
+
+    /// The pair of node `n` and tool `k` at the trial, `nearest` the tool's point nearest to
+    /// it, with the Hessian of kind `hessian`.
+    fn pair(
+        &self,
+        (n, k): (usize, usize),
         start: &IncrementStart,
         trial: &Trial,
-        tangent: Tangent,
-        residual: &mut [f64],
-        mut matrix: Option<&mut Vec<f64>>,
-    ) -> (Vec<NodeContact>, Vec<ToolLoad>, f64, usize) {
+        nearest: Option<Projection>,
+        hessian: PairHessian,
+    ) -> Option<PairContact> {
+        let y = trial.positions[n] - trial.translations[k];
+        pair_contact(
+            &self.model.tools[k],
+            &y,
+            nearest,
+            self.layout.penalty[n],
+            &self.model.contact,
+            start.friction[n][k].as_ref(),
+            PairOptions {
+                slip: self.slip_rate * start.dt,
+                hessian,
+                engaged: trial.engaged.map(|e| e[n][k]),
+            },
+        )
+    }
+
+    /// Contact and friction of every node with every tool: adds to the residual and returns
+    /// each node's contact, each tool's load, the pairs' energy and nearest points and how
+    /// many tunnelled.
+    fn contact(&self, start: &IncrementStart, trial: &Trial, residual: &mut [f64]) -> Contacts {
         let model = self.model;
         let layout = self.layout;
         let tools = model.tools.len();
-        let exact = self.exact && tangent == Tangent::Consistent;
-        let pairs: Vec<Vec<Option<PairContact>>> = (0..layout.nodes)
+        let pairs: Vec<Vec<(Option<Projection>, Option<PairContact>)>> = (0..layout.nodes)
             .into_par_iter()
             .map(|n| {
                 (0..tools)
                     .map(|k| {
                         let y = trial.positions[n] - trial.translations[k];
-                        pair_contact(
-                            &model.tools[k],
-                            &y,
-                            layout.penalty[n],
-                            &model.contact,
-                            start.friction[n][k].as_ref(),
-                            (
-                                self.slip_rate * start.dt,
-                                exact,
-                                trial.engaged.map(|e| e[n][k]),
-                            ),
-                        )
+                        let tool = &model.tools[k];
+                        let nearest = match trial.near {
+                            Some(lists) => tool.nearest_kept(&y, &lists[n * tools + k]),
+                            None => tool.nearest(&y),
+                        };
+                        let pair = self.pair((n, k), start, trial, nearest, PairHessian::None);
+                        (nearest, pair)
                     })
                     .collect()
             })
             .collect();
-        let mut contacts = vec![NodeContact::default(); layout.nodes];
-        let mut loads = vec![ToolLoad::default(); tools];
-        let mut energy = 0.0;
-        let mut tunnelled = 0;
-        for (n, node_pairs) in pairs.iter().enumerate() {
-            let contact = &mut contacts[n];
+        let mut out = Contacts {
+            contacts: vec![NodeContact::default(); layout.nodes],
+            loads: vec![ToolLoad::default(); tools],
+            nearest: Vec::with_capacity(layout.nodes * tools),
+            energy: 0.0,
+            tunnelled: 0,
+        };
+        for (n, node_pairs) in pairs.into_iter().enumerate() {
+            let contact = &mut out.contacts[n];
             contact.tangential = vec![Vector3::zeros(); tools];
             contact.normal_force = vec![0.0; tools];
             contact.near = vec![Default::default(); tools];
-            for (k, pair) in node_pairs.iter().enumerate() {
+            for (k, (nearest, pair)) in node_pairs.into_iter().enumerate() {
+                out.nearest.push(nearest);
                 let Some(pair) = pair else { continue };
-                tunnelled += usize::from(pair.tunnelled);
-                energy += pair.energy;
+                out.tunnelled += usize::from(pair.tunnelled);
+                out.energy += pair.energy;
                 let force = -pair.gradient;
                 contact.force += force;
                 contact.tangential[k] = pair.tangential;
                 contact.normal_force[k] = pair.normal_force;
+                let load = &mut out.loads[k];
                 if pair.normal_force > 0.0 {
-                    loads[k].normal_force += pair.normal_force;
-                    loads[k].stiffness += layout.penalty[n];
-                    loads[k].nodes_in_contact += 1;
+                    load.normal_force += pair.normal_force;
+                    load.stiffness += layout.penalty[n];
+                    load.nodes_in_contact += 1;
                 }
-                loads[k].force -= force;
+                load.force -= force;
                 for d in 0..3 {
                     residual[3 * n + d] += pair.gradient[d];
-                }
-                let hessian = match tangent {
-                    Tangent::Projected => positive_part3(&pair.hessian),
-                    _ => pair.hessian,
-                };
-                if let Some(values) = matrix.as_deref_mut() {
-                    layout.diagonal[n].add(&layout.held, values, |_, _| hessian);
                 }
                 if let (Some(u), Some((axis, _))) = (layout.tool_unknown[k], layout.tool_force[k]) {
                     // the pair's potential depends on y = x - u axis
                     residual[u] -= axis.dot(&pair.gradient);
-                    if let Some(values) = matrix.as_deref_mut() {
-                        let coupling = -(hessian * axis);
-                        for d in 0..3 {
-                            let i = 3 * n + d;
-                            if !layout.held[i] {
-                                values[layout.pattern.place(u, i).expect("tool coupling")] +=
-                                    coupling[d];
-                            }
-                        }
-                        values[layout.pattern.place(u, u).expect("tool diagonal")] +=
-                            axis.dot(&(hessian * axis));
-                    }
                 }
             }
         }
-        (contacts, loads, energy, tunnelled)
+        out
+    }
+
+    /// The pairs' Hessians at the trial of `evaluation`, added to the tangent `values`: each
+    /// node's own block and its coupling with a force-driven tool's travel.
+    fn contact_tangent(
+        &self,
+        start: &IncrementStart,
+        trial: &Trial,
+        evaluation: &Evaluation,
+        kind: Tangent,
+        values: &mut [f64],
+    ) {
+        let layout = self.layout;
+        let tools = self.model.tools.len();
+        let hessian_kind = if self.exact && kind == Tangent::Consistent {
+            PairHessian::Exact
+        } else {
+            PairHessian::GaussNewton
+        };
+        let hessians: Vec<Vec<Option<Matrix3<f64>>>> = (0..layout.nodes)
+            .into_par_iter()
+            .map(|n| {
+                (0..tools)
+                    .map(|k| {
+                        let nearest = evaluation.nearest[n * tools + k];
+                        let pair = self.pair((n, k), start, trial, nearest, hessian_kind);
+                        pair.map(|pair| match kind {
+                            Tangent::Projected => positive_part3(&pair.hessian),
+                            _ => pair.hessian,
+                        })
+                    })
+                    .collect()
+            })
+            .collect();
+        for (n, node_hessians) in hessians.into_iter().enumerate() {
+            for (k, hessian) in node_hessians.into_iter().enumerate() {
+                let Some(hessian) = hessian else { continue };
+                layout.diagonal[n].add(&layout.held, values, |_, _| hessian);
+                if let (Some(u), Some((axis, _))) = (layout.tool_unknown[k], layout.tool_force[k]) {
+                    let coupling = -(hessian * axis);
+                    for d in 0..3 {
+                        let i = 3 * n + d;
+                        if !layout.held[i] {
+                            values[layout.pattern.place(u, i).expect("tool coupling")] +=
+                                coupling[d];
+                        }
+                    }
+                    values[layout.pattern.place(u, u).expect("tool diagonal")] +=
+                        axis.dot(&(hessian * axis));
+                }
+            }
+        }
     }
 }
 
+/// What the contact of a trial gives: per node, per tool, the pairs' energy, each pair's
+/// nearest point (`[node * tools + tool]`), and how many pairs tunnelled.
+struct Contacts {
+    contacts: Vec<NodeContact>,
+    loads: Vec<ToolLoad>,
+    nearest: Vec<Option<Projection>>,
+    energy: f64,
+    tunnelled: usize,
+}
+
 /// Where the lower-triangle entries of the 3x3 blocks of a group of nodes (an element, a
-/// patch, one node) are stored, found once: for every pair `(a, b)` of its nodes with
-/// `nodes[a] >= nodes[b]`, in that order, and every column `e` of the block, the place of its
+/// patch, one node) are stored, found once: for every pair `(a, b)` of its nodes with `a`
+/// stored after `b` (or `a = b`), in that order, and every column `e` of the block, the place of its
 /// first stored row ([`Scatter::SKIP`] where the column is held). A binary search per column
 /// and block was the largest single cost of the assembly.
 struct Scatter {
     nodes: Vec<usize>,
+    /// Where each node's unknowns are stored: a block `(a, b)` is stored where `a` comes after
+    /// `b` (the lower triangle).
+    rank: Vec<usize>,
     places: Vec<u32>,
 }
 
@@ -497,9 +723,10 @@ impl Scatter {
 
     fn new(pattern: &Pattern, held: &[bool], nodes: &[usize]) -> Self {
         let mut places = Vec::new();
-        for &na in nodes {
-            for &nb in nodes {
-                if na < nb {
+        let rank: Vec<usize> = nodes.iter().map(|&n| pattern.position(3 * n)).collect();
+        for (&na, &ra) in nodes.iter().zip(&rank) {
+            for (&nb, &rb) in nodes.iter().zip(&rank) {
+                if ra < rb {
                     continue;
                 }
                 for e in 0..3 {
@@ -517,6 +744,7 @@ impl Scatter {
         }
         Self {
             nodes: nodes.to_vec(),
+            rank,
             places,
         }
     }
@@ -525,9 +753,9 @@ impl Scatter {
     /// group, skipping held rows and columns.
     fn add(&self, held: &[bool], values: &mut [f64], block: impl Fn(usize, usize) -> Matrix3<f64>) {
         let mut places = self.places.iter();
-        for (a, &na) in self.nodes.iter().enumerate() {
-            for (b, &nb) in self.nodes.iter().enumerate() {
-                if na < nb {
+        for (a, (&na, &ra)) in self.nodes.iter().zip(&self.rank).enumerate() {
+            for (b, (&nb, &rb)) in self.nodes.iter().zip(&self.rank).enumerate() {
+                if ra < rb {
                     continue;
                 }
                 let k = block(a, b);
@@ -538,7 +766,7 @@ impl Scatter {
                     }
                     let first = if na == nb { e } else { 0 };
                     for d in first..3 {
-                        // rows of one node are stored one after the other in a column
+                        // a node's three unknowns are stored one after the other
                         if !held[3 * na + d] {
                             values[start as usize + (d - first)] += k[(d, e)];
                         }

@@ -6,7 +6,8 @@
 //! The factorisation runs on one thread: its sums then come in the same order on any machine,
 //! so results do not depend on the thread count; the element loops around it run in parallel.
 
-use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::sparse::linalg::amd;
 use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky,
     SymmetricOrdering,
@@ -14,22 +15,44 @@ use faer::sparse::linalg::cholesky::{
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Conj, MatMut, Par, Side};
 
-/// The lower triangle of a symmetric sparsity pattern, compressed by columns, rows sorted.
+/// The lower triangle of a symmetric sparsity pattern, compressed by columns, rows sorted,
+/// stored in an elimination order chosen for it: the unknown `i` is row and column
+/// `position(i)` of the stored matrix `P K P^T`, so that the factorisation takes the matrix as
+/// stored, without permuting it first (that permutation was a third of each factorisation's
+/// time on the hemisphere).
 #[derive(Clone, Debug)]
 pub struct Pattern {
     symbolic: SymbolicSparseColMat<usize>,
+    /// Where each unknown is stored, and which unknown each place holds.
+    position: Vec<usize>,
+    unknown: Vec<usize>,
 }
 
 impl Pattern {
     /// The pattern of `n` unknowns in which every two unknowns of one group are coupled (and
-    /// every unknown with itself).
+    /// every unknown with itself), in their own order.
     pub fn from_groups<'a>(n: usize, groups: impl Iterator<Item = &'a [usize]>) -> Self {
+        Self::from_groups_in_order(n, groups, (0..n).collect())
+    }
+
+    /// [`Self::from_groups`] stored in the elimination order `order` (`order[k]` the unknown
+    /// eliminated `k`-th).
+    pub fn from_groups_in_order<'a>(
+        n: usize,
+        groups: impl Iterator<Item = &'a [usize]>,
+        order: Vec<usize>,
+    ) -> Self {
+        let mut position = vec![0; n];
+        for (k, &i) in order.iter().enumerate() {
+            position[i] = k;
+        }
         let mut rows: Vec<Vec<usize>> = (0..n).map(|j| vec![j]).collect();
         for group in groups {
             for &i in group {
                 for &j in group {
-                    if i > j {
-                        rows[j].push(i);
+                    let (pi, pj) = (position[i], position[j]);
+                    if pi > pj {
+                        rows[pj].push(pi);
                     }
                 }
             }
@@ -45,6 +68,8 @@ impl Pattern {
         }
         Self {
             symbolic: SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx),
+            position,
+            unknown: order,
         }
     }
 
@@ -58,22 +83,29 @@ impl Pattern {
         self.symbolic.row_idx().len()
     }
 
-    /// Where the entry `(i, j)` of the lower triangle (`i >= j`) is stored; `None` outside the
-    /// pattern.
-    pub fn place(&self, i: usize, j: usize) -> Option<usize> {
-        let (i, j) = if i >= j { (i, j) } else { (j, i) };
-        let start = self.symbolic.col_ptr()[j];
-        let column = &self.symbolic.row_idx()[start..self.symbolic.col_ptr()[j + 1]];
-        column.binary_search(&i).ok().map(|k| start + k)
+    /// Where unknown `i` is stored (its row and column in the stored matrix).
+    pub fn position(&self, i: usize) -> usize {
+        self.position[i]
     }
 
-    /// `y = K x` for the symmetric matrix whose lower triangle is `values`.
+    /// Where the entry `(i, j)` of the symmetric matrix is stored; `None` outside the
+    /// pattern.
+    pub fn place(&self, i: usize, j: usize) -> Option<usize> {
+        let (pi, pj) = (self.position[i], self.position[j]);
+        let (row, column) = if pi >= pj { (pi, pj) } else { (pj, pi) };
+        let start = self.symbolic.col_ptr()[column];
+        let stored = &self.symbolic.row_idx()[start..self.symbolic.col_ptr()[column + 1]];
+        stored.binary_search(&row).ok().map(|k| start + k)
+    }
+
+    /// `y = K x` for the symmetric matrix whose lower triangle is stored in `values`.
     pub fn multiply(&self, values: &[f64], x: &[f64]) -> Vec<f64> {
         let mut y = vec![0.0; x.len()];
         let (col_ptr, row_idx) = (self.symbolic.col_ptr(), self.symbolic.row_idx());
-        for j in 0..x.len() {
-            for k in col_ptr[j]..col_ptr[j + 1] {
-                let i = row_idx[k];
+        for pj in 0..x.len() {
+            let j = self.unknown[pj];
+            for k in col_ptr[pj]..col_ptr[pj + 1] {
+                let i = self.unknown[row_idx[k]];
                 y[i] += values[k] * x[j];
                 if i != j {
                     y[j] += values[k] * x[i];
@@ -82,34 +114,178 @@ impl Pattern {
         }
         y
     }
+
+    /// Entries of the Cholesky factor of a matrix of this pattern, fill-in included.
+    pub fn factor_entries(&self) -> Result<usize, String> {
+        Ok(symbolic_factorisation(self)?.len_val())
+    }
+}
+
+/// The symbolic Cholesky factorisation of the stored matrix, in its stored order. faer reads
+/// the upper triangle when it is given no ordering, so the structure is handed over
+/// transposed; the numeric factorisation takes the lower triangle as stored.
+fn symbolic_factorisation(pattern: &Pattern) -> Result<SymbolicCholesky<usize>, String> {
+    let n = pattern.size();
+    let (col_ptr, row_idx) = (pattern.symbolic.col_ptr(), pattern.symbolic.row_idx());
+    let mut upper: Vec<Vec<usize>> = vec![Vec::new(); n];
+    for j in 0..n {
+        for &i in &row_idx[col_ptr[j]..col_ptr[j + 1]] {
+            upper[i].push(j);
+        }
+    }
+    let mut upper_ptr = Vec::with_capacity(n + 1);
+    upper_ptr.push(0);
+    let mut upper_idx = Vec::with_capacity(row_idx.len());
+    for column in upper {
+        upper_idx.extend(column);
+        upper_ptr.push(upper_idx.len());
+    }
+    let upper = SymbolicSparseColMat::new_checked(n, n, upper_ptr, None, upper_idx);
+    factorize_symbolic_cholesky(
+        upper.as_ref(),
+        Side::Upper,
+        SymmetricOrdering::Identity,
+        CholeskySymbolicParams::default(),
+    )
+    .map_err(|e| format!("symbolic factorisation of the tangent: {e:?}"))
+}
+
+/// Approximate minimum degree (faer) of a graph given by each vertex's neighbours: the
+/// vertices in elimination order.
+pub fn minimum_degree(neighbours: &[Vec<usize>]) -> Result<Vec<usize>, String> {
+    let n = neighbours.len();
+    let mut col_ptr = Vec::with_capacity(n + 1);
+    let mut row_idx = Vec::new();
+    col_ptr.push(0);
+    for (j, around) in neighbours.iter().enumerate() {
+        let mut column: Vec<usize> = around.iter().copied().filter(|&i| i < j).collect();
+        column.push(j);
+        column.sort_unstable();
+        column.dedup();
+        row_idx.extend(column);
+        col_ptr.push(row_idx.len());
+    }
+    let upper = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
+    let (mut perm, mut perm_inv) = (vec![0usize; n], vec![0usize; n]);
+    let mut buffer = MemBuffer::new(amd::order_scratch::<usize>(n, upper.row_idx().len()));
+    amd::order(
+        &mut perm,
+        &mut perm_inv,
+        upper.as_ref(),
+        Default::default(),
+        MemStack::new(&mut buffer),
+    )
+    .map_err(|e| format!("minimum-degree ordering of the tangent: {e:?}"))?;
+    Ok(perm)
+}
+
+/// Geometric nested dissection of a sheet's nodes (George 1973): the nodes split at the median
+/// of their longer extent, the nodes of one half that touch the other half set apart as the
+/// separator and eliminated after both halves, each half dissected again down to small
+/// leaves. Returns the nodes in elimination order.
+pub fn nested_dissection(points: &[[f64; 3]], neighbours: &[Vec<usize>]) -> Vec<usize> {
+    const LEAF: usize = 16;
+    let n = points.len();
+    let mut side = vec![u32::MAX; n];
+    let mut order = Vec::with_capacity(n);
+    let mut stack: Vec<(Vec<usize>, Vec<usize>)> = vec![((0..n).collect(), Vec::new())];
+    // each entry: nodes to dissect, then separators to append once they are done; a task with
+    // no nodes left only appends its separator
+    let mut tag = 0u32;
+    while let Some((nodes, separator)) = stack.pop() {
+        if nodes.len() <= LEAF {
+            order.extend(nodes);
+            order.extend(separator);
+            continue;
+        }
+        let extent = |d: usize| {
+            let (lo, hi) = nodes
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
+                    (lo.min(points[v][d]), hi.max(points[v][d]))
+                });
+            hi - lo
+        };
+        let axis = (0..3)
+            .max_by(|&a, &b| extent(a).total_cmp(&extent(b)))
+            .unwrap_or(0);
+        let mut sorted = nodes;
+        sorted.sort_by(|&a, &b| points[a][axis].total_cmp(&points[b][axis]).then(a.cmp(&b)));
+        let half = sorted.len() / 2;
+        tag += 1;
+        let (left_tag, right_tag) = (2 * tag, 2 * tag + 1);
+        for (k, &v) in sorted.iter().enumerate() {
+            side[v] = if k < half { left_tag } else { right_tag };
+        }
+        let touches = |v: usize, other: u32| neighbours[v].iter().any(|&u| side[u] == other);
+        let left_sep: Vec<usize> = sorted[..half]
+            .iter()
+            .copied()
+            .filter(|&v| touches(v, right_tag))
+            .collect();
+        let right_sep: Vec<usize> = sorted[half..]
+            .iter()
+            .copied()
+            .filter(|&v| touches(v, left_tag))
+            .collect();
+        let cut = if left_sep.len() <= right_sep.len() {
+            left_sep
+        } else {
+            right_sep
+        };
+        for &v in &cut {
+            side[v] = u32::MAX;
+        }
+        let left: Vec<usize> = sorted[..half]
+            .iter()
+            .copied()
+            .filter(|&v| side[v] == left_tag)
+            .collect();
+        let right: Vec<usize> = sorted[half..]
+            .iter()
+            .copied()
+            .filter(|&v| side[v] == right_tag)
+            .collect();
+        // the parent's separator after this one's, after both halves
+        stack.push((Vec::new(), separator));
+        stack.push((Vec::new(), cut));
+        stack.push((right, Vec::new()));
+        stack.push((left, Vec::new()));
+    }
+    order
 }
 
 /// The tangent is not positive definite: a pivot of the factorisation was not positive.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct NotPositiveDefinite;
 
-/// A Cholesky factorisation `K = L L^T` on a fixed [`Pattern`].
+/// A Cholesky factorisation `K = L L^T` on a fixed [`Pattern`], in its stored order.
 pub struct Cholesky {
     symbolic: SymbolicCholesky<usize>,
     factor: Vec<f64>,
     factored: bool,
+    /// faer's workspace of the factorisation and the solve, kept: made anew at every
+    /// factorisation it was a page-faulted allocation each time.
+    scratch: MemBuffer,
+    /// Where each unknown is stored (the pattern's order).
+    position: Vec<usize>,
 }
 
 impl Cholesky {
-    /// The ordering and symbolic factorisation of `pattern`.
+    /// The symbolic factorisation of `pattern`.
     pub fn analyse(pattern: &Pattern) -> Result<Self, String> {
-        let symbolic = factorize_symbolic_cholesky(
-            pattern.symbolic.as_ref(),
-            Side::Lower,
-            SymmetricOrdering::Amd,
-            CholeskySymbolicParams::default(),
-        )
-        .map_err(|e| format!("symbolic factorisation of the tangent: {e:?}"))?;
+        let symbolic = symbolic_factorisation(pattern)?;
         let factor = vec![0.0; symbolic.len_val()];
+        let scratch = MemBuffer::new(StackReq::any_of(&[
+            symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
+            symbolic.solve_in_place_scratch::<f64>(1, Par::Seq),
+        ]));
         Ok(Self {
             symbolic,
             factor,
             factored: false,
+            scratch,
+            position: pattern.position.clone(),
         })
     }
 
@@ -126,10 +302,6 @@ impl Cholesky {
     ) -> Result<(), NotPositiveDefinite> {
         self.factored = false;
         let matrix = SparseColMatRef::new(pattern.symbolic.as_ref(), values);
-        let scratch = self
-            .symbolic
-            .factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default());
-        let mut buffer = MemBuffer::new(scratch);
         self.symbolic
             .factorize_numeric_llt(
                 &mut self.factor,
@@ -137,7 +309,7 @@ impl Cholesky {
                 Side::Lower,
                 Default::default(),
                 Par::Seq,
-                MemStack::new(&mut buffer),
+                MemStack::new(&mut self.scratch),
                 Default::default(),
             )
             .map_err(|_| NotPositiveDefinite)?;
@@ -146,17 +318,22 @@ impl Cholesky {
     }
 
     /// Solves `K x = rhs` in place with the last factorisation.
-    pub fn solve(&self, rhs: &mut [f64]) {
+    pub fn solve(&mut self, rhs: &mut [f64]) {
         assert!(self.factored, "solve before a successful factorisation");
         let n = rhs.len();
-        let scratch = self.symbolic.solve_in_place_scratch::<f64>(1, Par::Seq);
-        let mut buffer = MemBuffer::new(scratch);
+        let mut stored = vec![0.0; n];
+        for (i, &p) in self.position.iter().enumerate() {
+            stored[p] = rhs[i];
+        }
         LltRef::new(&self.symbolic, &self.factor).solve_in_place_with_conj(
             Conj::No,
-            MatMut::from_column_major_slice_mut(rhs, n, 1),
+            MatMut::from_column_major_slice_mut(&mut stored, n, 1),
             Par::Seq,
-            MemStack::new(&mut buffer),
+            MemStack::new(&mut self.scratch),
         );
+        for (i, &p) in self.position.iter().enumerate() {
+            rhs[i] = stored[p];
+        }
     }
 }
 

@@ -23,7 +23,7 @@ use super::explicit::{elastic_energy, positive_setting, Observer, SolverError, S
 use super::model::{Model, Motion};
 use crate::contact::potential::{penalty_stiffness, FrictionLag};
 use crate::contact::{RigidTool, ToolMotion};
-use assembly::{Evaluation, Evaluator, IncrementStart, Layout, Tangent, Trial};
+use assembly::{Evaluation, Evaluator, IncrementStart, Layout, NearLists, Tangent, Trial};
 use linear::Cholesky;
 use nalgebra::{Matrix2, Vector3};
 use std::time::Instant;
@@ -97,6 +97,15 @@ struct Converged {
     previous_contact: Vec<Vector3<f64>>,
 }
 
+/// What Newton's method keeps from one iteration and increment to the next: the
+/// factorisation on the run's pattern and the lists of the tools' triangles near each node.
+struct Workspace {
+    cholesky: Cholesky,
+    near: NearLists,
+    /// The tangent's values, a buffer reused by every iteration.
+    values: Vec<f64>,
+}
+
 /// Why an increment failed.
 struct NotConverged {
     residuals: Vec<f64>,
@@ -114,7 +123,11 @@ pub fn run(
 ) -> Result<State, SolverError> {
     check_settings(settings)?;
     let layout = layout(model, settings)?;
-    let mut cholesky = Cholesky::analyse(&layout.pattern).map_err(SolverError::Settings)?;
+    let mut work = Workspace {
+        cholesky: Cholesky::analyse(&layout.pattern).map_err(SolverError::Settings)?,
+        near: NearLists::default(),
+        values: Vec::new(),
+    };
     let evaluator = Evaluator {
         model,
         layout: &layout,
@@ -153,7 +166,7 @@ pub fn run(
         let step = dt.min(to_output).min(settings.end_time - state.time);
         let attempt = increment(
             &evaluator,
-            &mut cholesky,
+            &mut work,
             (&state, &converged),
             step,
             settings,
@@ -236,6 +249,7 @@ pub fn residual_and_tangent(
         positions,
         translations,
         engaged: None,
+        near: None,
     };
     let evaluation = evaluator
         .evaluate(&start, &trial, Tangent::Consistent)
@@ -412,54 +426,20 @@ fn predictor(model: &Model, state: &State, dt: f64) -> (Vec<Vector3<f64>>, Vec<V
 type Solved = (Evaluation, Vec<Vector3<f64>>, Vec<Vector3<f64>>, usize);
 
 /// One increment of duration `dt`: Newton's method with friction lagged at the increment's
-/// start, then again with the normal forces of its end while they differ from the lagged ones
-/// by more than [`FRICTION_LAG_CHANGE`] (at most [`FRICTION_PASSES`] times): a node that
-/// comes into contact during the increment would otherwise slide it without friction, and the
-/// friction force would lag the stroke by an increment.
+/// start and lagged again, as it converges, with the normal forces it reaches
+/// ([`FRICTION_LAG_CHANGE`], at most [`FRICTION_PASSES`] times): a node that comes into contact
+/// during the increment would otherwise slide it without friction, and the friction force
+/// would lag the stroke by an increment.
 fn increment(
     evaluator: &Evaluator,
-    cholesky: &mut Cholesky,
-    (state, converged): (&State, &Converged),
+    work: &mut Workspace,
+    from: (&State, &Converged),
     dt: f64,
     settings: &ImplicitSettings,
     stats: &mut ImplicitStatistics,
 ) -> Result<Solved, NotConverged> {
-    let mut lags = converged.friction.clone();
-    let mut guess = predictor(evaluator.model, state, dt);
-    let mut iterations = 0;
-    let mut passes = 0;
-    loop {
-        let start = IncrementStart {
-            positions: &state.positions,
-            strains: &converged.strains,
-            laminate_states: &state.laminate_states,
-            friction: &lags,
-            dt,
-        };
-        let (evaluation, x, translations, taken) =
-            newton(evaluator, cholesky, &start, guess, settings, stats)?;
-        iterations += taken;
-        passes += 1;
-        let refined = (passes <= FRICTION_PASSES)
-            .then(|| {
-                refined_lags(
-                    evaluator.model,
-                    state,
-                    &lags,
-                    &evaluation,
-                    &x,
-                    &translations,
-                )
-            })
-            .flatten();
-        match refined {
-            Some(better) => {
-                lags = better;
-                guess = (x, translations);
-            }
-            None => return Ok((evaluation, x, translations, iterations)),
-        }
-    }
+    let guess = predictor(evaluator.model, from.0, dt);
+    newton(evaluator, work, from, dt, guess, settings, stats)
 }
 
 /// Friction lagged again with the normal forces at the end of the increment, when they differ
@@ -504,16 +484,21 @@ fn lag_normal(tool: &RigidTool, y: &Vector3<f64>) -> Vector3<f64> {
         .map_or(Vector3::z(), |p| p.direction_to(y).0)
 }
 
-/// Newton's method on one increment from `start`, beginning at `guess` (positions and tool
-/// translations).
+/// Newton's method on one increment of `dt` from the converged `state`, beginning at `guess`
+/// (positions and tool translations), friction lagged from the increment's start and then
+/// from the normal forces reached once the residual is within [`LAG_REFRESH_BAND`] of its
+/// tolerance.
 fn newton(
     evaluator: &Evaluator,
-    cholesky: &mut Cholesky,
-    start: &IncrementStart,
+    work: &mut Workspace,
+    (state, converged): (&State, &Converged),
+    dt: f64,
     guess: (Vec<Vector3<f64>>, Vec<Vector3<f64>>),
     settings: &ImplicitSettings,
     stats: &mut ImplicitStatistics,
 ) -> Result<Solved, NotConverged> {
+    let mut lags = converged.friction.clone();
+    let mut refreshes = 0;
     let model = evaluator.model;
     let layout = evaluator.layout;
     let (mut x, mut translations) = guess;
@@ -526,51 +511,78 @@ fn newton(
             residuals,
             reason,
         };
-    // a solution on the frozen contact set, taken on the free set where it holds there
-    let on_free = |x: &[Vector3<f64>],
-                   translations: &[Vector3<f64>],
-                   evaluation: &Evaluation,
-                   scale: f64,
-                   stats: &mut ImplicitStatistics,
-                   residuals: &[f64]| {
-        let tolerance = settings.tolerance * scale;
-        on_free_set(
-            evaluator,
-            start,
-            (x, translations),
-            evaluation,
-            tolerance,
-            stats,
-        )
-        .map_err(|(k, e)| fail(residuals.to_vec(), None, format!("element {k}: {e}")))
-    };
     let mut frozen: Option<Vec<Vec<bool>>> = None;
     let mut freezes = 0;
     let mut worst = Vec::new();
+    // the accepted line-search probe, the residual where the next iteration starts, with the
+    // contact set it was evaluated on
+    let mut carried: Option<(Evaluation, Option<Vec<Vec<bool>>>)> = None;
     for iteration in 0..settings.max_iterations {
         stats.iterations += 1;
-        let clock = Instant::now();
-        let tangent = if projected {
-            Tangent::Projected
-        } else {
-            Tangent::Consistent
+        let start = &IncrementStart {
+            positions: &state.positions,
+            strains: &converged.strains,
+            laminate_states: &state.laminate_states,
+            friction: &lags,
+            dt,
+        };
+        // a solution on the frozen contact set, taken on the free set where it holds there
+        let on_free = |x: &[Vector3<f64>],
+                       translations: &[Vector3<f64>],
+                       evaluation: &Evaluation,
+                       scale: f64,
+                       stats: &mut ImplicitStatistics,
+                       residuals: &[f64]| {
+            let tolerance = settings.tolerance * scale;
+            on_free_set(
+                evaluator,
+                start,
+                (x, translations),
+                evaluation,
+                tolerance,
+                stats,
+            )
+            .map_err(|(k, e)| fail(residuals.to_vec(), None, format!("element {k}: {e}")))
         };
         let engaged = frozen.clone();
+        work.near.refresh(model, &x, &translations);
         let trial = Trial {
             positions: &x,
             translations: &translations,
             engaged: engaged.as_deref(),
+            near: Some(work.near.lists()),
         };
-        let evaluation = evaluator
-            .evaluate(start, &trial, tangent)
-            .map_err(|(k, e)| fail(residuals.clone(), None, format!("element {k}: {e}")))?;
-        stats.assembly_seconds += clock.elapsed().as_secs_f64();
+        let evaluation = match carried.take().filter(|(_, set)| *set == engaged) {
+            Some((evaluation, _)) => evaluation,
+            None => {
+                let clock = Instant::now();
+                let evaluation = evaluator
+                    .residual(start, &trial)
+                    .map_err(|(k, e)| fail(residuals.clone(), None, format!("element {k}: {e}")))?;
+                stats.assembly_seconds += clock.elapsed().as_secs_f64();
+                evaluation
+            }
+        };
         let norm = free_norm(layout, &evaluation.residual);
         residuals.push(norm);
         if iteration + 1 == settings.max_iterations {
             worst = worst_nodes(layout, &evaluation.residual);
         }
         let scale = force_scale(layout, &evaluation).max(layout.force_floor);
+        if norm <= LAG_REFRESH_BAND * settings.tolerance * scale && refreshes < FRICTION_PASSES {
+            if let Some(better) = refined_lags(model, state, &lags, &evaluation, &x, &translations)
+            {
+                lags = better;
+                refreshes += 1;
+                carried = None;
+                // a new incremental problem: Newton's method starts over on it from here
+                residuals.clear();
+                frozen = None;
+                freezes = 0;
+                projected = false;
+                continue;
+            }
+        }
         if norm <= settings.tolerance * scale {
             if evaluation.tunnelled > 0 {
                 return Err(fail(
@@ -592,42 +604,41 @@ fn newton(
             frozen = None;
             continue;
         }
-        if frozen.is_none() && iteration + 1 >= FREEZE_AFTER * (freezes + 1) {
+        if frozen.is_none() && residuals.len() >= FREEZE_AFTER * (freezes + 1) {
             freezes += 1;
-            frozen = Some(
-                evaluation
-                    .contacts
-                    .iter()
-                    .map(|c| c.normal_force.iter().map(|&f| f != 0.0).collect())
-                    .collect(),
-            );
+            frozen = Some(active_set(&evaluation));
         }
-        let clock = Instant::now();
-        let mut values = evaluation.matrix.clone().expect("tangent asked for");
-        let mut factored = cholesky.factorise(&layout.pattern, &values).is_ok();
-        stats.factorisations += 1;
-        if !factored && !projected {
-            stats.solve_seconds += clock.elapsed().as_secs_f64();
-            projected = true;
-            stats.projected += 1;
+        let kind = if projected {
+            Tangent::Projected
+        } else {
+            Tangent::Consistent
+        };
+        let mut factored = false;
+        for kind in [kind, Tangent::Projected] {
             let clock = Instant::now();
-            let again = evaluator
-                .evaluate(start, &trial, Tangent::Projected)
+            evaluator
+                .tangent(start, &trial, &evaluation, kind, &mut work.values)
                 .map_err(|(k, e)| fail(residuals.clone(), None, format!("element {k}: {e}")))?;
             stats.assembly_seconds += clock.elapsed().as_secs_f64();
-            values = again.matrix.expect("tangent asked for");
-            let clock2 = Instant::now();
-            factored = cholesky.factorise(&layout.pattern, &values).is_ok();
+            let clock = Instant::now();
+            factored = work
+                .cholesky
+                .factorise(&layout.pattern, &work.values)
+                .is_ok();
             stats.factorisations += 1;
-            stats.solve_seconds += clock2.elapsed().as_secs_f64();
-        } else {
             stats.solve_seconds += clock.elapsed().as_secs_f64();
+            if factored || projected {
+                break;
+            }
+            projected = true;
+            stats.projected += 1;
         }
+        let values = &mut work.values;
         let clock = Instant::now();
         let mut shift = 1e-10;
         while !factored && shift < 1.0 {
-            shift_diagonal(layout, &mut values, shift);
-            factored = cholesky.factorise(&layout.pattern, &values).is_ok();
+            shift_diagonal(layout, values, shift);
+            factored = work.cholesky.factorise(&layout.pattern, values).is_ok();
             stats.factorisations += 1;
             shift *= 100.0;
         }
@@ -644,7 +655,7 @@ fn newton(
             .zip(&layout.held)
             .map(|(r, &held)| if held { 0.0 } else { -r })
             .collect();
-        cholesky.solve(&mut direction);
+        work.cholesky.solve(&mut direction);
         stats.solve_seconds += clock.elapsed().as_secs_f64();
         let correction = largest_free(layout, &direction);
         // an increment that would be cut (stalled, or no step found) is solved if its
@@ -695,8 +706,9 @@ fn newton(
                 positions: &cx,
                 translations: &ct,
                 engaged: frozen.as_deref(),
+                near: Some(work.near.lists()),
             };
-            let probe = evaluator.evaluate(start, &trial, Tangent::None);
+            let probe = evaluator.residual(start, &trial);
             stats.assembly_seconds += clock.elapsed().as_secs_f64();
             if let Ok(probe) = probe {
                 let probe_norm = free_norm(layout, &probe.residual);
@@ -712,6 +724,7 @@ fn newton(
                     z = candidate;
                     x = cx;
                     translations = ct;
+                    carried = Some((probe, frozen.clone()));
                     accepted = true;
                     break;
                 }
@@ -764,8 +777,12 @@ fn newton(
     })
 }
 
-/// Newton passes of an increment with friction lagged again at its end, at most.
+/// Times an increment's friction is lagged again with the normal forces it reaches, at most.
 const FRICTION_PASSES: usize = 2;
+
+/// How close to converged (a multiple of the tolerance) the residual must be before friction
+/// is lagged again with the normal forces reached.
+const LAG_REFRESH_BAND: f64 = 10.0;
 
 /// Change of the friction limits `mu lambda`, relative to their sum, above which an increment
 /// is solved again with them lagged at its end.
@@ -833,6 +850,7 @@ fn on_free_set(
         positions: x,
         translations,
         engaged: None,
+        near: None,
     };
     let clock = Instant::now();
     let unfrozen = evaluator.evaluate(start, &free, Tangent::None)?;
@@ -845,6 +863,16 @@ fn on_free_set(
         .fold(0.0, f64::max);
     let settled = pull <= CORRECTION_TOLERANCE * layout.length_scale;
     Ok((settled || free_norm(layout, &unfrozen.residual) <= tolerance).then_some(unfrozen))
+}
+
+/// Which node–tool springs act in `evaluation` (`[node][tool]`): the contact set Newton's
+/// method freezes.
+fn active_set(evaluation: &Evaluation) -> Vec<Vec<bool>> {
+    evaluation
+        .contacts
+        .iter()
+        .map(|c| c.normal_force.iter().map(|&f| f != 0.0).collect())
+        .collect()
 }
 
 /// The largest free component of `v`.
