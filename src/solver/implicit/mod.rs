@@ -693,8 +693,23 @@ fn newton(
         let potential_decides =
             -slope > POTENTIAL_ROUNDING * evaluation.potential.abs().max(f64::MIN_POSITIVE);
         let mut accepted = false;
+        // the last probe's step and potential, for the interpolated steps after the halvings
+        let mut last_probe: Option<(f64, f64)> = None;
         // a stalled increment takes no step: it is settled or cut
-        for _ in 0..if stalled { 0 } else { LINE_SEARCH_HALVINGS } {
+        let attempts = if stalled {
+            0
+        } else {
+            LINE_SEARCH_HALVINGS + LINE_SEARCH_INTERPOLATIONS
+        };
+        for attempt in 0..attempts {
+            if attempt >= LINE_SEARCH_HALVINGS {
+                match last_probe
+                    .and_then(|(a, pi)| interpolated_step(a, pi - evaluation.potential, slope))
+                {
+                    Some(a) if potential_decides => alpha = a,
+                    _ => break,
+                }
+            }
             let candidate: Vec<f64> = z
                 .iter()
                 .zip(&direction)
@@ -728,6 +743,10 @@ fn newton(
                     accepted = true;
                     break;
                 }
+                last_probe = probe
+                    .potential
+                    .is_finite()
+                    .then_some((alpha, probe.potential));
             }
             alpha *= 0.5;
         }
@@ -806,6 +825,22 @@ const POTENTIAL_ROUNDING: f64 = 1e-10;
 
 /// Halvings of the step the line search tries before it gives up.
 const LINE_SEARCH_HALVINGS: usize = 12;
+
+/// Steps the line search tries after its halvings, each the minimum of the parabola through
+/// the potential at the start (with its slope) and at the last step tried: where the tangent
+/// does not see a contact spring that the step runs into (a node resting at the edge of its
+/// reach), the potential rises along the Newton correction from a step far below the
+/// halvings' last (measured on 20,164 elements: 3e-5, the halvings ending at 2.4e-4).
+const LINE_SEARCH_INTERPOLATIONS: usize = 4;
+
+/// The minimum of the parabola `slope a + c a^2` through the change `rise` of the potential at
+/// the step `alpha`, kept within a tenth and a half of `alpha`; `None` where that is no
+/// parabola opening upwards from a descent.
+fn interpolated_step(alpha: f64, rise: f64, slope: f64) -> Option<f64> {
+    let curvature = (rise - slope * alpha) / (alpha * alpha);
+    (slope < 0.0 && curvature > 0.0)
+        .then(|| (-slope / (2.0 * curvature)).clamp(0.1 * alpha, 0.5 * alpha))
+}
 
 /// Newton iterations after which the contact set (which node–tool springs act) is frozen for
 /// the rest of the iterations, every so many again: a node whose equilibrium lies at the edge
@@ -1069,4 +1104,32 @@ fn check_settings(s: &ImplicitSettings) -> Result<(), SolverError> {
         ));
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::interpolated_step;
+
+    /// Along a Newton correction the potential is `slope a + c a^2` where the tangent misses a
+    /// stiffness the step runs into: the interpolated step is that parabola's minimum, from any
+    /// step tried, kept within a tenth and a half of it.
+    #[test]
+    fn the_interpolated_step_is_the_minimum_of_the_parabola() {
+        let (slope, c) = (-2.5e-4, 4.0);
+        let minimum = -slope / (2.0 * c);
+        let rise = |a: f64| slope * a + c * a * a;
+        for alpha in [4.0 * minimum, 9.0 * minimum] {
+            let step = interpolated_step(alpha, rise(alpha), slope).unwrap();
+            assert!(
+                (step - minimum).abs() < 1e-12 * minimum,
+                "{step} against {minimum}"
+            );
+        }
+        let far = 1e3 * minimum;
+        assert_eq!(interpolated_step(far, rise(far), slope), Some(0.1 * far));
+        let near = 1.2 * minimum;
+        assert_eq!(interpolated_step(near, rise(near), slope), Some(0.5 * near));
+        assert_eq!(interpolated_step(1.0, -1.0, 2.0), None, "no descent");
+        assert_eq!(interpolated_step(1.0, -1.0, -0.5), None, "no minimum");
+    }
 }
