@@ -442,7 +442,7 @@ fn increment(
     newton(evaluator, work, from, dt, guess, settings, stats)
 }
 
-/// Friction lagged again with the normal forces at the end of the increment, when they differ
+/// Friction lagged again with the normal forces of the iterate `evaluation`, when they differ
 /// from the lagged ones by more than [`FRICTION_LAG_CHANGE`] of their sum; the slip still
 /// counts from the increment's start, along the start's tangent plane where there was one.
 fn refined_lags(
@@ -803,8 +803,8 @@ const FRICTION_PASSES: usize = 2;
 /// is lagged again with the normal forces reached.
 const LAG_REFRESH_BAND: f64 = 10.0;
 
-/// Change of the friction limits `mu lambda`, relative to their sum, above which an increment
-/// is solved again with them lagged at its end.
+/// Change of the friction limits `mu lambda`, relative to their sum, above which friction is
+/// lagged again with them and Newton's method goes on from there on the new problem.
 const FRICTION_LAG_CHANGE: f64 = 0.002;
 
 /// Iterations over which the residual must at least halve once the increment is this many
