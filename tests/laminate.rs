@@ -4,10 +4,11 @@
 mod common;
 
 use common::*;
-use nalgebra::{Matrix2, Matrix3, Matrix3x2};
+use nalgebra::{Matrix2, Matrix3, Matrix3x2, Vector2};
 use proptest::prelude::*;
 use std::sync::Arc;
 use thermostamp::experiment::material_point::{drive_laminate, MembraneSample};
+use thermostamp::material::fabric::SLACK_BAND;
 use thermostamp::material::laminate::BackwardEulerStep;
 use thermostamp::material::{
     FibreDirections, Laminate, Layer, MaterialCard, MaterialError, MaterialLaw, MembraneKinematics,
@@ -130,6 +131,13 @@ proptest! {
         angle in 0.0..3.2f64,
         dt in prop::sample::select(vec![1e-3, 0.05, 1.0]),
     ) {
+        // Central differences (step 1e-5 in E) are no reference where a yarn's strain lies
+        // within their reach of a kink of its tension's curvature: the rest length and the end
+        // of the slack band (docs/model.md §3).
+        let c = f.transpose() * f;
+        let (s, co) = angle.sin_cos();
+        let yarn_strains = [Vector2::new(co, s), Vector2::new(-s, co)].map(|a| a.dot(&(c * a)).sqrt() - 1.0);
+        prop_assume!(yarn_strains.iter().all(|e| e.abs() > 4e-5 && (e - SLACK_BAND).abs() > 4e-5));
         for card in [t300_card(), MaterialCard::load(&repo_path("tests/data/viscous-prepreg.toml")).unwrap()] {
             let matrix: Arc<dyn MaterialLaw> = card.matrix.clone().unwrap();
             let fabric: Arc<dyn MaterialLaw> = card.fabric.clone();
