@@ -7,30 +7,10 @@ mod common;
 
 use nalgebra::Vector3;
 use std::sync::Arc;
-use thermostamp::contact::{ContactSettings, RigidTool, ToolMotion, TriangleSurface};
+use thermostamp::contact::{ContactSettings, RigidTool, ToolMotion};
 use thermostamp::material::MaterialCard;
 use thermostamp::mesh::{rectangle, DiagonalPattern};
 use thermostamp::solver::{self, Constraint, Model, Motion, Observer, SolverSettings, State};
-
-/// A 60 x 60 mm square plate at height `z`, its normal along `side` (+1 up, -1 down).
-fn plate(z: f64, side: f64) -> TriangleSurface {
-    let corner = |x: f64, y: f64| Vector3::new(x, y, z);
-    let vertices = vec![
-        corner(-30.0, -30.0),
-        corner(30.0, -30.0),
-        corner(30.0, 30.0),
-        corner(-30.0, 30.0),
-    ];
-    let triangles = if side > 0.0 {
-        vec![[0, 1, 2], [0, 2, 3]]
-    } else {
-        vec![[0, 2, 1], [0, 3, 2]]
-    };
-    TriangleSurface {
-        vertices,
-        triangles,
-    }
-}
 
 /// Per record: time, pull force (reaction of the pulled edge along -x), normal force on the
 /// upper plate, deepest penetration into either plate.
@@ -93,13 +73,20 @@ fn slide_against_coulomb(solve: impl Fn(&Model, f64, &mut History) -> State) {
     let tools = vec![
         RigidTool::new(
             "lower plate",
-            plate(-t / 2.0, 1.0),
+            common::square_plate(-t / 2.0, 1.0),
             ToolMotion::Fixed,
             0.0,
             t,
         )
         .unwrap(),
-        RigidTool::new("upper plate", plate(t / 2.0, -1.0), press, mu, t).unwrap(),
+        RigidTool::new(
+            "upper plate",
+            common::square_plate(t / 2.0, -1.0),
+            press,
+            mu,
+            t,
+        )
+        .unwrap(),
     ];
     let contact = ContactSettings {
         offset: t / 2.0,
@@ -201,8 +188,22 @@ fn force_driven_holder_presses_with_its_force() {
         mass: 10.0 * blank_mass,
     };
     let tools = vec![
-        RigidTool::new("die", plate(t / 2.0, -1.0), ToolMotion::Fixed, 0.2, t).unwrap(),
-        RigidTool::new("holder", plate(-t / 2.0 - 0.05, 1.0), holder, 0.2, t).unwrap(),
+        RigidTool::new(
+            "die",
+            common::square_plate(t / 2.0, -1.0),
+            ToolMotion::Fixed,
+            0.2,
+            t,
+        )
+        .unwrap(),
+        RigidTool::new(
+            "holder",
+            common::square_plate(-t / 2.0 - 0.05, 1.0),
+            holder,
+            0.2,
+            t,
+        )
+        .unwrap(),
     ];
     let contact = ContactSettings {
         offset: t / 2.0,

@@ -6,7 +6,7 @@
 use super::scenario::{BlankShape, Scenario, ToolSet};
 use crate::material::MaterialCard;
 use crate::solver::estimate::{self, item_bytes, RunEstimate};
-use crate::solver::{Model, SolverSettings};
+use crate::solver::{implicit, Model, SolverSettings};
 
 /// What sets the size of a built-in rectangle, of a file blank, of built-in tools.
 const RECTANGLE_KEYS: &str = "blank.element_size (or shrink blank.width, blank.length)";
@@ -96,15 +96,17 @@ pub fn check_model(
     Ok(estimate)
 }
 
-/// The estimate of the built model for the implicit solver, refused only when its memory does
-/// not fit: its increments do not follow the explicit stable step.
+/// The estimate of the built model for the implicit solver, its sparse tangent and factor
+/// counted, refused only when its memory does not fit: its increments do not follow the
+/// explicit stable step.
 pub fn check_memory_of(
     s: &Scenario,
     model: &Model,
     settings: &SolverSettings,
 ) -> Result<RunEstimate, String> {
     let on = |e: String| format!("{}: {e}", s.origin);
-    let estimate = estimate::estimate(model, settings).map_err(on)?;
+    let mut estimate = estimate::estimate(model, settings).map_err(on)?;
+    estimate.memory += implicit::sparse_memory(model).map_err(on)?;
     estimate::check_memory(estimate.memory, RECTANGLE_KEYS).map_err(on)?;
     Ok(estimate)
 }

@@ -219,3 +219,23 @@ pub fn shear_law_error(
         })
         .fold(0.0, f64::max)
 }
+
+/// A `60 x 60` mm square plate at height `z`, its normal along `side` (+1 up, -1 down).
+pub fn square_plate(z: f64, side: f64) -> thermostamp::contact::TriangleSurface {
+    let corner = |x: f64, y: f64| Vector3::new(x, y, z);
+    let vertices = vec![
+        corner(-30.0, -30.0),
+        corner(30.0, -30.0),
+        corner(30.0, 30.0),
+        corner(-30.0, 30.0),
+    ];
+    let triangles = if side > 0.0 {
+        vec![[0, 1, 2], [0, 2, 3]]
+    } else {
+        vec![[0, 2, 1], [0, 3, 2]]
+    };
+    thermostamp::contact::TriangleSurface {
+        vertices,
+        triangles,
+    }
+}

@@ -126,6 +126,28 @@ impl Layout {
             diagonal,
         }
     }
+
+    /// Adds to the tangent `values` the Hessian `hessian` of a potential of node `n` relative
+    /// to tool `k` (`y = x_n - u_k`): on the node's block, and where the tool is force-driven
+    /// on its coupling with the tool's travel and on the travel's own entry.
+    pub fn add_pair_block(
+        &self,
+        values: &mut [f64],
+        (n, k): (usize, usize),
+        hessian: &Matrix3<f64>,
+    ) {
+        self.diagonal[n].add(&self.held, values, |_, _| *hessian);
+        if let (Some(u), Some((axis, _))) = (self.tool_unknown[k], self.tool_force[k]) {
+            let coupling = -(hessian * axis);
+            for d in 0..3 {
+                let i = 3 * n + d;
+                if !self.held[i] {
+                    values[self.pattern.place(u, i).expect("tool coupling")] += coupling[d];
+                }
+            }
+            values[self.pattern.place(u, u).expect("tool diagonal")] += axis.dot(&(hessian * axis));
+        }
+    }
 }
 
 /// The order in which the factorisation eliminates the unknowns: node by node (a node's
@@ -676,19 +698,8 @@ impl Evaluator<'_> {
             .collect();
         for (n, node_hessians) in hessians.into_iter().enumerate() {
             for (k, hessian) in node_hessians.into_iter().enumerate() {
-                let Some(hessian) = hessian else { continue };
-                layout.diagonal[n].add(&layout.held, values, |_, _| hessian);
-                if let (Some(u), Some((axis, _))) = (layout.tool_unknown[k], layout.tool_force[k]) {
-                    let coupling = -(hessian * axis);
-                    for d in 0..3 {
-                        let i = 3 * n + d;
-                        if !layout.held[i] {
-                            values[layout.pattern.place(u, i).expect("tool coupling")] +=
-                                coupling[d];
-                        }
-                    }
-                    values[layout.pattern.place(u, u).expect("tool diagonal")] +=
-                        axis.dot(&(hessian * axis));
+                if let Some(hessian) = hessian {
+                    layout.add_pair_block(values, (n, k), &hessian);
                 }
             }
         }

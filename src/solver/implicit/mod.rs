@@ -13,10 +13,12 @@
 //! ([`linear::Cholesky`]); where the consistent tangent is not positive definite (the sheet
 //! buckling, a wrinkle forming), every element's tangent is projected to its positive
 //! semi-definite part ([`assembly::Tangent::Projected`]) and the step is globalised by a
-//! backtracking line search on the residual. An increment that does not converge is cut; one
+//! backtracking line search on the residual. The contact springs a correction enters are
+//! anticipated in its linear model ([`contact_entry`]). An increment that does not converge is cut; one
 //! that converges fast lets the next grow.
 
 pub mod assembly;
+pub mod contact_entry;
 pub mod linear;
 
 use super::explicit::{elastic_energy, positive_setting, Observer, SolverError, State};
@@ -322,6 +324,19 @@ pub fn layout(model: &Model, settings: &ImplicitSettings) -> Result<Layout, Solv
     layout.force_floor = FORCE_FLOOR * shear.max(1e-12 * wave) * mean_size;
     layout.length_scale = mean_size;
     Ok(layout)
+}
+
+/// Bytes per stored entry of the sparse tangent and of its factor: a value and a row index.
+const SPARSE_ENTRY_BYTES: f64 = 16.0;
+
+/// The memory (bytes) the sparse tangent of `model` and its Cholesky factor take, fill-in
+/// included, on the pattern and elimination order the run will use: what an implicit run needs
+/// beyond the arrays of the model and its state.
+pub fn sparse_memory(model: &Model) -> Result<f64, String> {
+    let n = model.mesh.nodes.len();
+    let layout = Layout::new(model, vec![0.0; n], vec![0.0; n]);
+    let factor = Cholesky::analyse(&layout.pattern)?.factor_entries();
+    Ok(SPARSE_ENTRY_BYTES * (layout.pattern.entries() + factor) as f64)
 }
 
 /// The smallest force scale of the convergence test, as a fraction of `G t0 h` (the force that
@@ -649,15 +664,55 @@ fn newton(
                 "the tangent could not be factorised even when shifted".into(),
             ));
         }
-        let mut direction: Vec<f64> = evaluation
-            .residual
-            .iter()
-            .zip(&layout.held)
-            .map(|(r, &held)| if held { 0.0 } else { -r })
-            .collect();
+        let descent = || -> Vec<f64> {
+            evaluation
+                .residual
+                .iter()
+                .zip(&layout.held)
+                .map(|(r, &held)| if held { 0.0 } else { -r })
+                .collect()
+        };
+        let mut direction = descent();
         work.cholesky.solve(&mut direction);
-        stats.solve_seconds += clock.elapsed().as_secs_f64();
         let correction = largest_free(layout, &direction);
+        // the springs the correction enters, anticipated in the linear model (kept where the
+        // correction still descends)
+        let mut anticipated = Vec::new();
+        let mut newton_direction = None;
+        for _ in 0..ANTICIPATION_ROUNDS {
+            let entries = contact_entry::entering(
+                model,
+                layout,
+                &evaluation,
+                (&x, &translations),
+                frozen.as_deref(),
+                &direction,
+                &anticipated,
+            );
+            if entries.is_empty() {
+                break;
+            }
+            contact_entry::add_springs(layout, &entries, &mut work.values);
+            stats.factorisations += 1;
+            if work
+                .cholesky
+                .factorise(&layout.pattern, &work.values)
+                .is_err()
+            {
+                break;
+            }
+            anticipated.extend(entries);
+            newton_direction.get_or_insert_with(|| direction.clone());
+            direction = descent();
+            contact_entry::add_pushes(layout, &anticipated, &mut direction);
+            work.cholesky.solve(&mut direction);
+        }
+        if let Some(newton) = newton_direction {
+            if slope_along(layout, &direction, &evaluation.residual) >= 0.0 {
+                direction = newton;
+            }
+        }
+        stats.solve_seconds += clock.elapsed().as_secs_f64();
         // an increment that would be cut (stalled, or no step found) is solved if its
         // positions are settled: the residual floors where nodes rest at the edge of a
         // contact spring's reach
@@ -669,13 +724,7 @@ fn newton(
         // its slope (Armijo; on a positive definite tangent the direction always descends) or
         // the residual norm, whichever first: the potential alone stops deciding near the
         // solution, where its changes are at its rounding
-        let slope: f64 = direction
-            .iter()
-            .zip(&evaluation.residual)
-            .zip(&layout.held)
-            .filter(|(_, &h)| !h)
-            .map(|((d, r), _)| d * r)
-            .sum();
+        let slope = slope_along(layout, &direction, &evaluation.residual);
         // a force-driven tool moves at most a quarter of the contact's reach per step: its
         // potential -F u falls without bound once it has passed through the blank
         let tool_step = layout
@@ -796,6 +845,9 @@ fn newton(
     })
 }
 
+/// Times a correction is solved again with the contact springs it enters, at most.
+const ANTICIPATION_ROUNDS: usize = 3;
+
 /// Times an increment's friction is lagged again with the normal forces it reaches, at most.
 const FRICTION_PASSES: usize = 2;
 
@@ -908,6 +960,17 @@ fn active_set(evaluation: &Evaluation) -> Vec<Vec<bool>> {
         .iter()
         .map(|c| c.normal_force.iter().map(|&f| f != 0.0).collect())
         .collect()
+}
+
+/// `dPi/dalpha` along `direction` at `alpha = 0`: the free unknowns' `direction . residual`.
+fn slope_along(layout: &Layout, direction: &[f64], residual: &[f64]) -> f64 {
+    direction
+        .iter()
+        .zip(residual)
+        .zip(&layout.held)
+        .filter(|(_, &h)| !h)
+        .map(|((d, r), _)| d * r)
+        .sum()
 }
 
 /// The largest free component of `v`.
