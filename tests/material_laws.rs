@@ -8,7 +8,7 @@ use nalgebra::{Matrix3, Vector3};
 use proptest::prelude::*;
 use std::f64::consts::FRAC_PI_2;
 use thermostamp::experiment::material_point::{drive_layer, matrix_uniaxial_stress, PointSample};
-use thermostamp::material::fabric::{shear_angle, ShearInteraction, YarnTension};
+use thermostamp::material::fabric::{shear_angle, ShearInteraction, YarnTension, SLACK_BAND};
 use thermostamp::material::{
     cauchy_stress, FibreDirections, MaterialError, MaterialLaw, PointKinematics, TemperatureTable,
     ViscoHyperelasticMatrix, WovenFabric,
@@ -164,6 +164,11 @@ proptest! {
         dc in prop::array::uniform6(-1.0..1.0f64),
         dc_dot in prop::array::uniform6(-1.0..1.0f64),
     ) {
+        // Central differences are no reference where a yarn's stretch lies within their reach
+        // (about 1e-6) of a kink of its tension's curvature: the rest length and the end of
+        // the slack band (docs/model.md §3).
+        let away_from_kinks = |l: f64| (l - 1.0).abs() > 1e-5 && (l - 1.0 - SLACK_BAND).abs() > 1e-5;
+        prop_assume!(away_from_kinks(la) && away_from_kinks(lb));
         let card = t300_card();
         let matrix = card.matrix.as_deref().unwrap();
         let fabric = unbalanced_fabric();
@@ -172,8 +177,8 @@ proptest! {
         let sheared = to_fibres * trellis(gamma.to_radians(), la, lb, 1.0) * to_fibres.transpose();
         let cases: [(&dyn MaterialLaw, PointKinematics, f64); 2] = [
             (matrix, point(&f, &f_dot, fibres), 1e-6),
-            // a step well inside the slack band, so that a difference seldom straddles its ends
-            (&fabric, point(&sheared, &Matrix3::zeros(), fibres), 1e-7),
+            // at 1e-7 the rounding of the stress over the step reached 1e-5 of the derivative
+            (&fabric, point(&sheared, &Matrix3::zeros(), fibres), 1e-6),
         ];
         let direction = (symmetric(dc), symmetric(dc_dot));
         for (law, p, h) in cases {
