@@ -14,8 +14,8 @@
 //! buckling, a wrinkle forming), every element's tangent is projected to its positive
 //! semi-definite part ([`assembly::Tangent::Projected`]) and the step is globalised by a
 //! backtracking line search on the residual. The contact springs a correction enters are
-//! anticipated in its linear model ([`contact_entry`]). An increment that does not converge is cut; one
-//! that converges fast lets the next grow.
+//! anticipated in its linear model ([`contact_entry`]). An increment that does not converge is
+//! cut; one that converges fast lets the next grow.
 
 pub mod assembly;
 pub mod contact_entry;
