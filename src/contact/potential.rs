@@ -15,7 +15,7 @@
 
 use super::penalty::ContactSettings;
 use super::rigid_tool::RigidTool;
-use super::surface::{Feature, Projection};
+use super::surface::{Feature, Footing, Projection};
 use nalgebra::{Matrix3, Vector3};
 
 /// The friction of a node on one tool during an increment: what was lagged at its start.
@@ -174,10 +174,11 @@ pub fn contact_margin(settings: &ContactSettings) -> f64 {
 }
 
 /// `d^2/dy^2` of the spring `1/2 k (g - g_m)^2` to `p`, the point of the tool nearest to `y`:
-/// `k n n^T + k (g - g_m) dn/dy`. In front of a face the normal is the face's and does not
-/// turn; in front of an edge or a corner it is `(y - p) / |y - p|`, which turns as `y` moves
-/// across the edge (`(I - n n^T - t t^T) / |y - p|`, `t` along the edge) or in any direction
-/// about the corner (`(I - n n^T) / |y - p|`); behind the tool it is the face's.
+/// `k n n^T + k (g - g_m) dn/dy`. On an exact surface `dn/dy` is its turn (the surface's
+/// curvature seen from `y`). On a triangulated one, in front of a face the normal is the face's
+/// and does not turn; in front of an edge or a corner it is `(y - p) / |y - p|`, which turns as
+/// `y` moves across the edge (`(I - n n^T - t t^T) / |y - p|`, `t` along the edge) or in any
+/// direction about the corner (`(I - n n^T) / |y - p|`); behind the tool it is the face's.
 fn normal_hessian(
     tool: &RigidTool,
     p: Projection,
@@ -188,15 +189,19 @@ fn normal_hessian(
     let (n, distance) = p.direction_to(y);
     let k = stiffness;
     let spring = n * n.transpose() * k;
+    let gap = distance - settings.offset - contact_margin(settings);
+    let triangle = match p.on {
+        Footing::Smooth { turn } => return spring + turn * (k * gap),
+        Footing::Facet(triangle) => triangle,
+    };
     if !p.in_front(y) {
         return spring;
     }
-    let turn = match tool.feature_on(p.triangle, y) {
+    let turn = match tool.feature_on(triangle, y) {
         Feature::Face => return spring,
         Feature::Edge(t) => Matrix3::identity() - n * n.transpose() - t * t.transpose(),
         Feature::Vertex => Matrix3::identity() - n * n.transpose(),
     };
-    let gap = distance - settings.offset - contact_margin(settings);
     spring + turn * (k * gap / distance)
 }
 
@@ -241,7 +246,10 @@ mod tests {
         let points = [off((a + b + c) / 3.0), off(0.5 * (a + b)), off(a)];
         let features: Vec<Feature> = points
             .iter()
-            .map(|y| tool.feature_on(tool.nearest(y).unwrap().triangle, y))
+            .map(|y| match tool.nearest(y).unwrap().on {
+                Footing::Facet(k) => tool.feature_on(k, y),
+                Footing::Smooth { .. } => unreachable!("a triangulated tool"),
+            })
             .collect();
         assert!(matches!(features[0], Feature::Face), "{features:?}");
         assert!(matches!(features[1], Feature::Edge(_)), "{features:?}");
@@ -250,6 +258,91 @@ mod tests {
             let at = |z: Vector3<f64>| {
                 pair_contact(
                     &tool,
+                    &z,
+                    tool.nearest(&z),
+                    500.0,
+                    &SETTINGS,
+                    Some(&lag),
+                    options(0.01, PairHessian::Exact),
+                )
+                .unwrap()
+            };
+            let pair = at(y);
+            assert!(pair.normal_force > 0.0, "{k}: touching");
+            let h = 1e-6;
+            for d in 0..3 {
+                let mut step = Vector3::zeros();
+                step[d] = h;
+                let (plus, minus) = (at(y + step), at(y - step));
+                let slope = (plus.energy - minus.energy) / (2.0 * h);
+                assert!(
+                    (slope - pair.gradient[d]).abs() < 1e-5 * pair.gradient.norm(),
+                    "{k} {d}: {slope} against {}",
+                    pair.gradient[d]
+                );
+                let column = (plus.gradient - minus.gradient) / (2.0 * h);
+                let error = (column - pair.hessian.column(d)).norm();
+                assert!(error < 1e-4 * pair.hessian.norm(), "{k} {d}: {error}");
+            }
+        }
+    }
+
+    /// The same on the exact surfaces of a die (plate, fillet, wall) and of a holder (its
+    /// plate and, beyond its inner rim, the rim's edge), with friction.
+    #[test]
+    fn on_exact_surfaces_gradient_and_hessian_are_the_derivatives_of_the_potential() {
+        use crate::contact::{
+            double_dome_die, double_dome_die_shape, double_dome_holder_shape, DieShape,
+        };
+        let shape = DieShape {
+            opening_radius: 12.0,
+            fillet_radius: 5.0,
+            outer_radius: 40.0,
+            depth: 20.0,
+        };
+        let die = RigidTool::new(
+            "die",
+            double_dome_die(8.0, &shape, 2.0).unwrap(),
+            ToolMotion::Fixed,
+            0.3,
+            1.0,
+        )
+        .unwrap()
+        .with_exact_surface(double_dome_die_shape(8.0, &shape).unwrap().lifted(0.25));
+        let holder = RigidTool::new(
+            "holder",
+            crate::contact::double_dome_holder(8.0, 15.0, 40.0, 2.0).unwrap(),
+            ToolMotion::Fixed,
+            0.3,
+            1.0,
+        )
+        .unwrap()
+        .with_exact_surface(
+            double_dome_holder_shape(8.0, 15.0, 40.0)
+                .unwrap()
+                .lifted(-0.25),
+        );
+        let cases = [
+            (&die, Vector3::new(20.0, 6.0, 0.1)),
+            (&die, Vector3::new(3.0, 13.05, 1.2)),
+            (&die, Vector3::new(-11.0, 10.5, 0.9)),
+            (&die, Vector3::new(2.0, 12.3, 8.0)),
+            (&holder, Vector3::new(4.0, 20.0, 0.1)),
+            (&holder, Vector3::new(-6.0, 14.8, 0.1)),
+            (&holder, Vector3::new(-10.0, 14.5, 0.1)),
+        ];
+        for (k, (tool, rough)) in cases.into_iter().enumerate() {
+            // 0.15 mm in front of the surface: inside the spring's reach
+            let foot = tool.exact_surface().unwrap().nearest(&rough);
+            let y = foot.point + foot.normal * 0.15;
+            let lag = FrictionLag {
+                limit: 3.0,
+                normal: tool.nearest(&y).unwrap().normal,
+                start: y + Vector3::new(0.02, -0.01, 0.0),
+            };
+            let at = |z: Vector3<f64>| {
+                pair_contact(
+                    tool,
                     &z,
                     tool.nearest(&z),
                     500.0,

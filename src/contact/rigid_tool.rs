@@ -9,8 +9,10 @@
 
 use super::penalty::ToolLoad;
 use super::surface::{
-    closest_feature_on_triangle, closest_point_on_triangle, Feature, Projection, TriangleSurface,
+    closest_feature_on_triangle, closest_point_on_triangle, Feature, Footing, Projection,
+    TriangleSurface,
 };
+use super::swept_profile::SweptProfile;
 use nalgebra::Vector3;
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -56,6 +58,9 @@ pub struct RigidTool {
     pub surface: TriangleSurface,
     pub motion: ToolMotion,
     pub friction: f64,
+    /// The exact surface the triangles approximate, where it is known (the built-in tools):
+    /// contact then projects onto it, and the triangles are what the output shows.
+    exact: Option<SweptProfile>,
     search_radius: f64,
     grid: SurfaceGrid,
     /// Centre and radius of a sphere around each triangle, for the full search of [`Self::gap`].
@@ -112,10 +117,36 @@ impl RigidTool {
             surface,
             motion,
             friction,
+            exact: None,
             search_radius,
             grid,
             spheres,
         })
+    }
+
+    /// The tool with the exact surface its triangles were made from: contact projects onto it
+    /// (see [`super::swept_profile`]).
+    pub fn with_exact_surface(mut self, exact: SweptProfile) -> Self {
+        self.exact = Some(exact);
+        self
+    }
+
+    /// The exact surface, where the tool has one.
+    pub fn exact_surface(&self) -> Option<&SweptProfile> {
+        self.exact.as_ref()
+    }
+
+    /// The nearest point of the exact surface, when the tool has one.
+    fn exact_nearest(&self, p: &Vector3<f64>) -> Option<Option<Projection>> {
+        let exact = self.exact.as_ref()?;
+        let foot = exact.nearest(p);
+        Some(
+            (foot.distance.abs() <= self.search_radius).then_some(Projection {
+                point: foot.point,
+                normal: foot.normal,
+                on: Footing::Smooth { turn: foot.turn },
+            }),
+        )
     }
 
     /// The tool's velocity at `t` for a step `dt`, from its velocity `last` over the last step
@@ -140,12 +171,18 @@ impl RigidTool {
     /// The nearest point of the surface to `p` (in the tool's frame), if it is within the search
     /// radius; `None` when no triangle is that near.
     pub fn nearest(&self, p: &Vector3<f64>) -> Option<Projection> {
+        if let Some(exact) = self.exact_nearest(p) {
+            return exact;
+        }
         self.nearest_among(p, self.grid.candidates(p).map_or(&[], Vec::as_slice))
     }
 
     /// [`Self::nearest`] for a node that keeps its list of near triangles between calls: the
     /// list is made again only when the node has moved `margin` since it was made.
     pub fn nearest_listed(&self, p: &Vector3<f64>, near: &mut NearTriangles) -> Option<Projection> {
+        if let Some(exact) = self.exact_nearest(p) {
+            return exact;
+        }
         self.refresh_near_list(p, near);
         self.nearest_among(p, &near.triangles)
     }
@@ -154,6 +191,9 @@ impl RigidTool {
     /// `p` is within its margin of where it was made, by the grid otherwise: the same
     /// triangles are looked at either way, the list's are fewer.
     pub fn nearest_kept(&self, p: &Vector3<f64>, near: &NearTriangles) -> Option<Projection> {
+        if let Some(exact) = self.exact_nearest(p) {
+            return exact;
+        }
         let margin = list_margin(self.search_radius);
         match near.anchor {
             Some(a) if (p - a).norm_squared() < margin * margin => {
@@ -167,9 +207,10 @@ impl RigidTool {
     /// of `p` and still serves there.
     pub fn refresh_near_list(&self, p: &Vector3<f64>, near: &mut NearTriangles) {
         let margin = list_margin(self.search_radius);
-        if near
-            .anchor
-            .is_none_or(|a| (p - a).norm_squared() >= margin * margin)
+        if self.exact.is_none()
+            && near
+                .anchor
+                .is_none_or(|a| (p - a).norm_squared() >= margin * margin)
         {
             self.list_near_triangles(p, near);
         }
@@ -198,9 +239,9 @@ impl RigidTool {
             .filter(|x| x.2 <= self.search_radius * self.search_radius)
             .min_by(|x, y| x.2.total_cmp(&y.2))
             .map(|(triangle, point, _)| Projection {
-                triangle,
                 point,
                 normal: self.surface.normal(triangle),
+                on: Footing::Facet(triangle),
             })
     }
 
@@ -239,6 +280,9 @@ impl RigidTool {
     /// Within the search radius the grid lists every triangle that can be the nearest; beyond
     /// it, a full search (for frames and checks, not for every step).
     pub fn gap(&self, p: &Vector3<f64>, offset: f64) -> f64 {
+        if let Some(exact) = &self.exact {
+            return exact.nearest(p).distance - offset;
+        }
         if let Some(near) = self.nearest(p) {
             return near.direction_to(p).1 - offset;
         }
@@ -257,9 +301,9 @@ impl RigidTool {
         }
         best.map_or(f64::INFINITY, |(k, q, _)| {
             let nearest = Projection {
-                triangle: k,
                 point: q,
                 normal: self.surface.normal(k),
+                on: Footing::Facet(k),
             };
             nearest.direction_to(p).1 - offset
         })
@@ -416,9 +460,9 @@ mod tests {
                 })
                 .unwrap();
             let exhaustive = Projection {
-                triangle: nearest.0,
                 point: nearest.1,
                 normal: tool.surface.normal(nearest.0),
+                on: Footing::Facet(nearest.0),
             }
             .direction_to(&p)
             .1;

@@ -1,6 +1,6 @@
 //! Rigid tool surfaces: triangulated, with outward normals facing the blank.
 
-use nalgebra::Vector3;
+use nalgebra::{Matrix3, Vector3};
 use std::collections::HashMap;
 
 /// A triangulated rigid surface in its own frame (mm). Triangles are counter-clockwise seen
@@ -14,23 +14,36 @@ pub struct TriangleSurface {
 /// The point of a surface nearest to a query point.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Projection {
-    /// Index of the triangle that holds the nearest point.
-    pub triangle: usize,
     /// The nearest point.
     pub point: Vector3<f64>,
-    /// Unit normal of that triangle, towards the blank's side.
+    /// Unit normal there, towards the blank's side: the facet's on a triangulated surface.
     pub normal: Vector3<f64>,
+    /// What the nearest point lies on.
+    pub on: Footing,
+}
+
+/// What a [`Projection`]'s point lies on: a facet of a triangulated surface, or a tool's exact
+/// smooth surface ([`super::swept_profile`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Footing {
+    /// Triangle `k` of the surface.
+    Facet(usize),
+    /// The exact surface, where the normal is the direction from the point to the query and
+    /// `turn` is its derivative with respect to the query.
+    Smooth { turn: Matrix3<f64> },
 }
 
 impl Projection {
-    /// The direction from the surface to `x` and the signed distance along it: the unit vector
-    /// from the nearest point to `x` when `x` is on the blank's side, so that over an edge or a
-    /// corner of a faceted convex tool the gap is the true distance, not its component along
-    /// one facet's normal (which would read a node resting on a punch's ridge as a penetration
-    /// of `t/2 (1 - cos)` of half the facet angle); the facet's normal when `x` is behind it.
+    /// The direction from the surface to `x` and the signed distance along it. On a
+    /// triangulated surface: the unit vector from the nearest point to `x` when `x` is on the
+    /// blank's side, so that over an edge or a corner of a faceted convex tool the gap is the
+    /// true distance, not its component along one facet's normal (which would read a node
+    /// resting on a punch's ridge as a penetration of `t/2 (1 - cos)` of half the facet angle);
+    /// the facet's normal when `x` is behind it. On an exact surface: its normal, on either
+    /// side.
     pub fn direction_to(&self, x: &Vector3<f64>) -> (Vector3<f64>, f64) {
         let d = x - self.point;
-        if self.in_front(x) {
+        if matches!(self.on, Footing::Facet(_)) && self.in_front(x) {
             let distance = d.norm();
             (d / distance, distance)
         } else {
@@ -38,8 +51,9 @@ impl Projection {
         }
     }
 
-    /// Whether `x` is on the blank's side of the surface (and off it): where
-    /// [`Self::direction_to`] is the unit vector from the nearest point, not the facet's normal.
+    /// Whether `x` is on the blank's side of the surface (and off it): where, on a
+    /// triangulated surface, [`Self::direction_to`] is the unit vector from the nearest point,
+    /// not the facet's normal.
     pub fn in_front(&self, x: &Vector3<f64>) -> bool {
         let d = x - self.point;
         d.dot(&self.normal) > 0.0 && d.norm() > 0.0
@@ -206,9 +220,9 @@ mod tests {
         // two facets meeting at a ridge along y, each tilted by 0.1 rad
         let (c, s) = (0.1f64.cos(), 0.1f64.sin());
         let left = Projection {
-            triangle: 0,
             point: Vector3::zeros(),
             normal: Vector3::new(-s, 0.0, c),
+            on: Footing::Facet(0),
         };
         let above = Vector3::new(0.0, 0.0, 0.5);
         let (n, gap) = left.direction_to(&above);

@@ -29,6 +29,7 @@
 //! area and volume is second order in `resolution`.
 
 use super::surface::TriangleSurface;
+use super::swept_profile::{ProfilePiece, SweptProfile};
 use nalgebra::Vector3;
 use std::f64::consts::{FRAC_PI_2, PI};
 
@@ -63,12 +64,8 @@ pub fn hemisphere_punch_with_skirt(
     skirt_height: f64,
     resolution: f64,
 ) -> Result<TriangleSurface, String> {
-    const TOOL: &str = "hemisphere_punch";
-    check_positive(TOOL, "radius", radius)?;
-    check_non_negative(TOOL, "skirt_height", skirt_height)?;
-    check_positive(TOOL, "resolution", resolution)?;
-    let profile = punch_profile(radius, skirt_height, resolution)?;
-    sweep(TOOL, &profile, 0.0, resolution)
+    let shape = punch_shape("hemisphere_punch", 0.0, radius, skirt_height)?;
+    triangulated("hemisphere_punch", &shape, resolution)
 }
 
 /// Die of a hemispherical set-up: a flat annular plate in `z = 0` (normal down, towards the
@@ -122,6 +119,15 @@ fn stadium_die(
     die: &DieShape,
     resolution: f64,
 ) -> Result<TriangleSurface, String> {
+    triangulated(tool, &die_shape(tool, half_length, die)?, resolution)
+}
+
+/// The exact surface of [`double_dome_die`] (of [`hemisphere_die`] for `half_length = 0`).
+pub fn double_dome_die_shape(half_length: f64, die: &DieShape) -> Result<SweptProfile, String> {
+    die_shape("double_dome_die", half_length, die)
+}
+
+fn die_shape(tool: &str, half_length: f64, die: &DieShape) -> Result<SweptProfile, String> {
     let DieShape {
         opening_radius,
         fillet_radius,
@@ -133,7 +139,6 @@ fn stadium_die(
     check_positive(tool, "fillet_radius", fillet_radius)?;
     check_positive(tool, "outer_radius", outer_radius)?;
     check_positive(tool, "depth", depth)?;
-    check_positive(tool, "resolution", resolution)?;
     if fillet_radius >= opening_radius {
         return Err(format!(
             "{tool}: fillet_radius ({fillet_radius}) must be smaller than opening_radius \
@@ -153,14 +158,10 @@ fn stadium_die(
              wall above the fillet"
         ));
     }
-    let profile = die_profile(
-        opening_radius,
-        fillet_radius,
-        outer_radius,
-        depth,
-        resolution,
-    )?;
-    sweep(tool, &profile, half_length, resolution)
+    Ok(SweptProfile::new(
+        die_profile(opening_radius, fillet_radius, outer_radius, depth),
+        half_length,
+    ))
 }
 
 /// Blank holder: the flat annulus `inner_radius <= r <= outer_radius` in `z = 0`, below the
@@ -199,19 +200,44 @@ fn stadium_holder(
     outer_radius: f64,
     resolution: f64,
 ) -> Result<TriangleSurface, String> {
+    let shape = holder_shape(tool, half_length, inner_radius, outer_radius)?;
+    triangulated(tool, &shape, resolution)
+}
+
+/// The exact surface of [`double_dome_holder`] (of [`blank_holder`] for `half_length = 0`).
+pub fn double_dome_holder_shape(
+    half_length: f64,
+    inner_radius: f64,
+    outer_radius: f64,
+) -> Result<SweptProfile, String> {
+    holder_shape(
+        "double_dome_holder",
+        half_length,
+        inner_radius,
+        outer_radius,
+    )
+}
+
+fn holder_shape(
+    tool: &str,
+    half_length: f64,
+    inner_radius: f64,
+    outer_radius: f64,
+) -> Result<SweptProfile, String> {
     check_non_negative(tool, "half_length", half_length)?;
     check_positive(tool, "inner_radius", inner_radius)?;
     check_positive(tool, "outer_radius", outer_radius)?;
-    check_positive(tool, "resolution", resolution)?;
     if outer_radius <= inner_radius {
         return Err(format!(
             "{tool}: outer_radius ({outer_radius}) must exceed inner_radius ({inner_radius})"
         ));
     }
     // Profile outward: its left normal (-z', r') is then +z (see `sweep`).
-    let mut profile = Profile::start(inner_radius, 0.0);
-    profile.line_to(outer_radius, 0.0, resolution)?;
-    sweep(tool, &profile.points, half_length, resolution)
+    let plate = ProfilePiece::Line {
+        from: [inner_radius, 0.0],
+        to: [outer_radius, 0.0],
+    };
+    Ok(SweptProfile::new(vec![plate], half_length))
 }
 
 /// Double-dome punch, a (choice) simplifying the woven-composites "double dome" benchmark to a
@@ -230,13 +256,44 @@ pub fn double_dome_punch(
     skirt_height: f64,
     resolution: f64,
 ) -> Result<TriangleSurface, String> {
-    const TOOL: &str = "double_dome_punch";
-    check_non_negative(TOOL, "half_length", half_length)?;
-    check_positive(TOOL, "radius", radius)?;
-    check_non_negative(TOOL, "skirt_height", skirt_height)?;
-    check_positive(TOOL, "resolution", resolution)?;
-    let profile = punch_profile(radius, skirt_height, resolution)?;
-    sweep(TOOL, &profile, half_length, resolution)
+    let shape = double_dome_punch_shape(half_length, radius, skirt_height)?;
+    triangulated("double_dome_punch", &shape, resolution)
+}
+
+/// The exact surface of [`double_dome_punch`] (of [`hemisphere_punch_with_skirt`] for
+/// `half_length = 0`).
+pub fn double_dome_punch_shape(
+    half_length: f64,
+    radius: f64,
+    skirt_height: f64,
+) -> Result<SweptProfile, String> {
+    punch_shape("double_dome_punch", half_length, radius, skirt_height)
+}
+
+fn punch_shape(
+    tool: &str,
+    half_length: f64,
+    radius: f64,
+    skirt_height: f64,
+) -> Result<SweptProfile, String> {
+    check_non_negative(tool, "half_length", half_length)?;
+    check_positive(tool, "radius", radius)?;
+    check_non_negative(tool, "skirt_height", skirt_height)?;
+    Ok(SweptProfile::new(
+        punch_profile(radius, skirt_height),
+        half_length,
+    ))
+}
+
+/// The triangles of `shape`, edges about `resolution` long (see the module's "Meshes").
+fn triangulated(
+    tool: &str,
+    shape: &SweptProfile,
+    resolution: f64,
+) -> Result<TriangleSurface, String> {
+    check_positive(tool, "resolution", resolution)?;
+    let profile = sampled(shape.pieces(), resolution)?;
+    sweep(tool, &profile, shape.half_length(), resolution)
 }
 
 /// Distance of the point `(x, y)` of the blank's plane from the ridge segment `|x| <=
@@ -269,30 +326,61 @@ fn check_non_negative(tool: &str, name: &str, value: f64) -> Result<(), String> 
 /// Punch profile from the apex down: quarter circle `r = R cos a`, `z = -R + R sin a` for `a`
 /// from 90° to 0°, then the skirt straight down. Going down and outward puts the profile's left
 /// normal outward, towards the blank.
-fn punch_profile(radius: f64, skirt_height: f64, h: f64) -> Result<Vec<[f64; 2]>, String> {
-    let mut profile = Profile::start(0.0, 0.0);
-    profile.arc_to([0.0, -radius], radius, FRAC_PI_2, 0.0, [radius, -radius], h)?;
+fn punch_profile(radius: f64, skirt_height: f64) -> Vec<ProfilePiece> {
+    let mut pieces = vec![ProfilePiece::Arc {
+        centre: [0.0, -radius],
+        radius,
+        from: FRAC_PI_2,
+        to: 0.0,
+    }];
     if skirt_height > 0.0 {
-        profile.line_to(radius, -radius - skirt_height, h)?;
+        pieces.push(ProfilePiece::Line {
+            from: [radius, -radius],
+            to: [radius, -radius - skirt_height],
+        });
     }
-    Ok(profile.points)
+    pieces
 }
 
 /// Die profile from the outer rim inward: the plate along `z = 0`, the fillet (angle `a` from
 /// -90° to -180° about its centre, point `c + Rf (cos a, sin a)`), then the wall up. Going inward
 /// puts the left normal down on the plate and towards the axis on the wall.
-fn die_profile(
-    opening: f64,
-    fillet: f64,
-    outer: f64,
-    depth: f64,
-    h: f64,
-) -> Result<Vec<[f64; 2]>, String> {
+fn die_profile(opening: f64, fillet: f64, outer: f64, depth: f64) -> Vec<ProfilePiece> {
     let centre = [opening + fillet, fillet];
-    let mut profile = Profile::start(outer, 0.0);
-    profile.line_to(centre[0], 0.0, h)?;
-    profile.arc_to(centre, fillet, -FRAC_PI_2, -PI, [opening, fillet], h)?;
-    profile.line_to(opening, depth, h)?;
+    vec![
+        ProfilePiece::Line {
+            from: [outer, 0.0],
+            to: [centre[0], 0.0],
+        },
+        ProfilePiece::Arc {
+            centre,
+            radius: fillet,
+            from: -FRAC_PI_2,
+            to: -PI,
+        },
+        ProfilePiece::Line {
+            from: [opening, fillet],
+            to: [opening, depth],
+        },
+    ]
+}
+
+/// The points of a profile about `h` apart, each piece ending on its exact end point.
+fn sampled(pieces: &[ProfilePiece], h: f64) -> Result<Vec<[f64; 2]>, String> {
+    let [r0, z0] = pieces[0].start();
+    let mut profile = Profile::start(r0, z0);
+    for piece in pieces {
+        let [r, z] = piece.finish();
+        match *piece {
+            ProfilePiece::Line { .. } => profile.line_to(r, z, h)?,
+            ProfilePiece::Arc {
+                centre,
+                radius,
+                from,
+                to,
+            } => profile.arc_to(centre, radius, from, to, [r, z], h)?,
+        }
+    }
     Ok(profile.points)
 }
 

@@ -9,8 +9,9 @@
 use super::preflight;
 use super::scenario::{BlankShape, Scenario, SetKind, ToolFile, ToolFiles, ToolSet, Tools};
 use crate::contact::{
-    distance_from_ridge, double_dome_die, double_dome_holder, double_dome_punch, read_stl,
-    ContactSettings, DieShape, Facing, RigidTool, ToolMotion, TriangleSurface,
+    distance_from_ridge, double_dome_die, double_dome_die_shape, double_dome_holder,
+    double_dome_holder_shape, double_dome_punch, double_dome_punch_shape, read_stl,
+    ContactSettings, DieShape, Facing, RigidTool, SweptProfile, ToolMotion, TriangleSurface,
 };
 use crate::experiment::sheet_test::Crosshead;
 use crate::material::MaterialCard;
@@ -343,33 +344,40 @@ fn built_in_tool_set(
     let outer = reach + 10.0;
     let depth = s.process.stroke + t.die_fillet_radius + 10.0;
     let skirt = t.punch_radius;
-    let punch_surface = shifted(
-        double_dome_punch(ridge, t.punch_radius, skirt, t.resolution)?,
-        -half,
-    );
+    let punch_shape = double_dome_punch_shape(ridge, t.punch_radius, skirt)?.lifted(-half);
     let die = DieShape {
         opening_radius: t.die_opening_radius,
         fillet_radius: t.die_fillet_radius,
         outer_radius: outer,
         depth,
     };
+    let die_shape = double_dome_die_shape(ridge, &die)?.lifted(half);
+    let punch_surface = shifted(
+        double_dome_punch(ridge, t.punch_radius, skirt, t.resolution)?,
+        -half,
+    );
     let die_surface = shifted(double_dome_die(ridge, &die, t.resolution)?, half);
-    let mut tools = punch_and_die(s, punch_surface, die_surface, punch, thickness)?;
+    let mut tools = punch_and_die(
+        s,
+        (punch_surface, Some(punch_shape)),
+        (die_surface, Some(die_shape)),
+        punch,
+        thickness,
+    )?;
     let Some((motion, gap)) = holder_drive(s, blank_mass) else {
         return Ok((tools, None));
     };
+    let inner = t.holder_inner_radius();
     let holder_surface = shifted(
-        double_dome_holder(ridge, t.holder_inner_radius(), outer, t.resolution)?,
+        double_dome_holder(ridge, inner, outer, t.resolution)?,
         -half - gap,
     );
+    let holder_shape = double_dome_holder_shape(ridge, inner, outer)?.lifted(-half - gap);
     let friction = s.process.friction.holder;
-    tools.push(RigidTool::new(
-        "blank holder",
-        holder_surface,
-        motion,
-        friction,
-        thickness,
-    )?);
+    tools.push(
+        RigidTool::new("blank holder", holder_surface, motion, friction, thickness)?
+            .with_exact_surface(holder_shape),
+    );
     Ok((tools, Some(2)))
 }
 
@@ -382,11 +390,14 @@ fn blank_reach(mesh: &Mesh, t: &Tools) -> f64 {
         .fold(0.0, f64::max)
 }
 
+/// A tool's triangles and, for a built-in tool, the exact surface they were made from.
+type ToolSurface = (TriangleSurface, Option<SweptProfile>);
+
 /// The punch (velocity-driven along +z) and the fixed die, with the scenario's friction.
 fn punch_and_die(
     s: &Scenario,
-    punch_surface: TriangleSurface,
-    die_surface: TriangleSurface,
+    punch_surface: ToolSurface,
+    die_surface: ToolSurface,
     punch: Crosshead,
     thickness: f64,
 ) -> Result<Vec<RigidTool>, String> {
@@ -394,21 +405,16 @@ fn punch_and_die(
     let punch_motion = ToolMotion::Velocity(Arc::new(move |time| {
         Vector3::new(0.0, 0.0, punch.velocity(time))
     }));
+    let tool = |name: &str, (surface, exact): ToolSurface, motion, friction| {
+        let tool = RigidTool::new(name, surface, motion, friction, thickness)?;
+        Ok::<_, String>(match exact {
+            Some(exact) => tool.with_exact_surface(exact),
+            None => tool,
+        })
+    };
     Ok(vec![
-        RigidTool::new(
-            "punch",
-            punch_surface,
-            punch_motion,
-            friction.punch,
-            thickness,
-        )?,
-        RigidTool::new(
-            "die",
-            die_surface,
-            ToolMotion::Fixed,
-            friction.die,
-            thickness,
-        )?,
+        tool("punch", punch_surface, punch_motion, friction.punch)?,
+        tool("die", die_surface, ToolMotion::Fixed, friction.die)?,
     ])
 }
 
@@ -454,7 +460,13 @@ fn file_tool_set(
     let punch_surface = tool_surface("punch", &f.punch, &up, notes)?;
     let die_surface = tool_surface("die", &f.die, &-up, notes)?;
     check_stroke(s, &punch_surface, &f.punch.file)?;
-    let mut tools = punch_and_die(s, punch_surface, die_surface, punch, thickness)?;
+    let mut tools = punch_and_die(
+        s,
+        (punch_surface, None),
+        (die_surface, None),
+        punch,
+        thickness,
+    )?;
     let (Some(holder), Some((motion, gap))) = (&f.holder, holder_drive(s, blank_mass)) else {
         if f.holder.is_some() {
             notes.push(
