@@ -80,6 +80,8 @@ fn main() {
             strains: &strains,
             laminate_states: &pressed.laminate_states,
             friction: &friction,
+            velocities: &pressed.velocities,
+            masses: &pressed.masses,
             dt: settings.output_interval,
         };
         // the next increment's first trial: every node a little farther along its way

@@ -217,6 +217,10 @@ pub struct IncrementStart<'a> {
     pub laminate_states: &'a [LaminateState],
     /// Friction of each node on each tool (`[node][tool]`).
     pub friction: &'a [Vec<Option<FrictionLag>>],
+    /// Velocity of every node at the start (mm/s) and its mass (tonne): the inertia of
+    /// backward Euler.
+    pub velocities: &'a [Vector3<f64>],
+    pub masses: &'a [f64],
     pub dt: f64,
 }
 
@@ -415,6 +419,15 @@ impl Evaluator<'_> {
                 residual[3 * n + d] += c * travel[d];
             }
         }
+        let rate = 1.0 / (start.dt * start.dt);
+        for n in 0..layout.nodes {
+            let lead = trial.positions[n] - start.positions[n] - start.velocities[n] * start.dt;
+            let m = start.masses[n] * rate;
+            potential += 0.5 * m * lead.norm_squared();
+            for d in 0..3 {
+                residual[3 * n + d] += m * lead[d];
+            }
+        }
         for (k, unknown) in layout.tool_unknown.iter().enumerate() {
             if let (Some(u), Some((axis, force))) = (unknown, layout.tool_force[k]) {
                 residual[*u] -= force;
@@ -485,8 +498,9 @@ impl Evaluator<'_> {
             }
         }
         self.contact_tangent(start, trial, evaluation, kind, values);
+        let rate = 1.0 / (start.dt * start.dt);
         for n in 0..layout.nodes {
-            let c = layout.drag[n];
+            let c = layout.drag[n] + start.masses[n] * rate;
             layout.diagonal[n].add(&layout.held, values, |_, _| Matrix3::identity() * c);
         }
         for u in layout.tool_unknown.iter().flatten() {

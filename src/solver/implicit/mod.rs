@@ -245,6 +245,8 @@ pub fn residual_and_tangent(
         strains: &strains,
         laminate_states: &rest.laminate_states,
         friction,
+        velocities: &rest.velocities,
+        masses: &rest.masses,
         dt,
     };
     let trial = Trial {
@@ -539,6 +541,8 @@ fn newton(
             strains: &converged.strains,
             laminate_states: &state.laminate_states,
             friction: &lags,
+            velocities: &state.velocities,
+            masses: &state.masses,
             dt,
         };
         // a solution on the frozen contact set, taken on the free set where it holds there
@@ -1084,6 +1088,7 @@ fn accept(
     dt: f64,
 ) {
     let (mut internal, mut external, mut tool) = (0.0, 0.0, 0.0);
+    let (mut kinetic, mut dissipated) = (0.0, 0.0);
     for (a, x_a) in x.iter().enumerate() {
         let du = x_a - state.positions[a];
         let f_int = evaluation.internal[a];
@@ -1102,7 +1107,11 @@ fn accept(
         converged.previous_forces[a] = f_int;
         converged.previous_reactions[a] = reaction;
         converged.previous_contact[a] = f_contact;
-        state.velocities[a] = du / dt;
+        let v = du / dt;
+        // backward Euler's inertia does the kinetic energy's change and dissipates the rest
+        dissipated += 0.5 * state.masses[a] * (v - state.velocities[a]).norm_squared();
+        kinetic += 0.5 * state.masses[a] * v.norm_squared();
+        state.velocities[a] = v;
         state.reactions[a] = reaction;
     }
     for (k, t) in translations.iter().enumerate() {
@@ -1138,11 +1147,11 @@ fn accept(
     state.tool_loads = evaluation.loads;
     state.time_step = dt;
     state.time += dt;
-    state.energies.kinetic = 0.0;
+    state.energies.kinetic = kinetic;
     state.energies.internal_work += internal;
     state.energies.external_work += external + tool;
     state.energies.tool_work += tool;
-    state.energies.damping += evaluation.drag_work;
+    state.energies.damping += evaluation.drag_work + dissipated;
 }
 
 fn check_settings(s: &ImplicitSettings) -> Result<(), SolverError> {
