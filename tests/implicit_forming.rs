@@ -70,15 +70,18 @@ fn implicit_hemisphere_forms_the_part_the_explicit_solver_forms() {
 /// With no blank holder the flange touches only the die above it and rests at the edge of the
 /// die's contact springs, where the residual floors at 1e-4 N while the forces at play are
 /// 1e-3 N: the increments are solved once the positions are settled (docs/solver.md,
-/// "settled"). Before that, the run stopped at its first increment. Over 6 mm on the shipped
-/// 8 mm cells: every increment converges, the energy balances, and the flange has begun to
-/// wave (0.23 mm measured).
+/// "settled"). Further on, past 12.8 mm of stroke, a wave in the wall over the die's opening
+/// snaps through, which only the inertia lets the run follow (docs/solver.md, "Exact tool
+/// surfaces and inertia"). Over 14 mm on the shipped 8 mm cells: every increment converges
+/// (before the exact tool surfaces the run stopped at 9.6 mm, before the inertia at 12.8 mm),
+/// the flange waves by millimetres, the snap shows as kinetic energy, and the energy
+/// balances within the summary's warning.
 #[test]
-fn implicit_hemisphere_without_a_holder_converges_as_the_flange_waves() {
+fn implicit_hemisphere_without_a_holder_follows_the_flange_through_its_snap() {
     let overrides = [
         "process.blank_holder_force=0".to_string(),
-        "process.stroke=6".into(),
-        "output.history_points=12".into(),
+        "process.stroke=14".into(),
+        "output.history_points=28".into(),
     ];
     let scenario = Scenario::load(
         &common::repo_path("tests/data/hemisphere-implicit.toml"),
@@ -91,12 +94,18 @@ fn implicit_hemisphere_without_a_holder_converges_as_the_flange_waves() {
     assert!((state.time - forming.settings.end_time).abs() < 1e-9);
     let last = result.records.last().unwrap();
     let balance = last.energies.balance_error();
-    assert!(balance < 0.01, "energy balance {balance}");
+    assert!(balance < 0.05, "energy balance {balance}");
     assert!(
-        last.wrinkles.waviness > 0.05,
+        last.wrinkles.waviness > 2.0,
         "flange waviness {} mm",
         last.wrinkles.waviness
     );
+    let kinetic = result
+        .records
+        .iter()
+        .map(|r| r.energies.kinetic)
+        .fold(0.0, f64::max);
+    assert!(kinetic > 0.0, "the snap moves the sheet");
 }
 
 /// Counts the records it is given, at which times.

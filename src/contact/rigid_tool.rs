@@ -59,7 +59,7 @@ pub struct RigidTool {
     pub motion: ToolMotion,
     pub friction: f64,
     /// The exact surface the triangles approximate, where it is known (the built-in tools):
-    /// contact then projects onto it, and the triangles are what the output shows.
+    /// contact then projects onto it; the triangles bound the tool for the run's checks.
     exact: Option<SweptProfile>,
     search_radius: f64,
     grid: SurfaceGrid,

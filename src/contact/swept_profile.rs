@@ -7,8 +7,8 @@
 //! radius: a node sliding over it turns its normal through the facets' angle within a
 //! fraction of a millimetre, and Newton's method can cycle there. The exact surface is smooth
 //! (tangent-continuous where its profile is), so the nearest point, the normal and the normal's
-//! turn (the surface's curvature) all vary continuously with the node. The triangulation stays
-//! what the tool looks like in the output files.
+//! turn (the surface's curvature) all vary continuously with the node. The triangulation still
+//! bounds the tool for the run's checks and its memory estimate.
 
 use nalgebra::{Matrix3, Vector3};
 
