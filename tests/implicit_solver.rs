@@ -369,6 +369,42 @@ fn explicit_only_settings_are_refused() {
 
 struct Last(Option<State>);
 
+/// A frictionless plate on the sheet's upper face (of thickness `t`), pushed down by `force`.
+fn pressing_plate(t: f64, force: f64) -> RigidTool {
+    RigidTool::new(
+        "plate",
+        square_plate(t / 2.0, -1.0),
+        ToolMotion::Force {
+            force: Vector3::new(0.0, 0.0, -force),
+            mass: 1e-6,
+        },
+        0.0,
+        t,
+    )
+    .unwrap()
+}
+
+/// A free 20 x 20 mm sheet of `card` (4 x 4 cells, no bending, nothing held) among `tools`.
+fn free_sheet(card: &MaterialCard, tools: Vec<RigidTool>) -> Model {
+    let t = card.laminate.reference_thickness();
+    let contact = ContactSettings {
+        offset: t / 2.0,
+        penalty_scale: 0.1,
+        max_penetration: t,
+    };
+    let mesh = rectangle(20.0, 20.0, 4, 4, DiagonalPattern::Right);
+    Model::new(
+        mesh,
+        card.laminate.clone(),
+        card.density,
+        20.0,
+        Vector3::x(),
+        vec![],
+    )
+    .unwrap()
+    .with_tools(tools, contact)
+}
+
 impl Observer for Last {
     fn record(&mut self, _: &Model, state: &State) -> anyhow::Result<()> {
         self.0 = Some(state.clone());
@@ -397,34 +433,9 @@ fn a_sheet_pressed_onto_a_floor_is_solved_in_one_newton_step() {
             t,
         )
         .unwrap(),
-        RigidTool::new(
-            "plate",
-            square_plate(t / 2.0, -1.0),
-            ToolMotion::Force {
-                force: Vector3::new(0.0, 0.0, -force),
-                mass: 1e-6,
-            },
-            0.0,
-            t,
-        )
-        .unwrap(),
+        pressing_plate(t, force),
     ];
-    let contact = ContactSettings {
-        offset: t / 2.0,
-        penalty_scale: 0.1,
-        max_penetration: t,
-    };
-    let mesh = rectangle(20.0, 20.0, 4, 4, DiagonalPattern::Right);
-    let model = Model::new(
-        mesh,
-        card.laminate.clone(),
-        card.density,
-        20.0,
-        Vector3::x(),
-        vec![],
-    )
-    .unwrap()
-    .with_tools(tools, contact);
+    let model = free_sheet(&card, tools);
     let mut settings = ImplicitSettings::new(1.0, 1.0);
     settings.max_increment = Some(4.0);
     let mut last = Last(None);
@@ -456,40 +467,15 @@ fn a_sheet_pressed_onto_a_floor_is_solved_in_one_newton_step() {
 /// `a = F / M` with its physical mass `M`: after `T` it has travelled `a T^2 / 2` and moves
 /// at `a T`, to the first-order error of backward Euler (`1 / N` over `N` increments). Without
 /// the inertia only the small stabilising drag resists the force (measured: the first
-/// increment does not converge, cut down to 2e-8 s). The kinetic energy is `M v^2 / 2` and the energy balance closes, the
-/// scheme's dissipation booked as damping.
+/// increment does not converge, cut down to 2e-8 s). The kinetic energy is `M v^2 / 2` and
+/// the energy balance closes, the scheme's dissipation booked as damping.
 #[test]
 fn a_free_sheet_pushed_by_a_constant_force_accelerates_as_newton_says() {
     let card = MaterialCard::load(&repo_path("tests/data/stiff-yarn-fabric.toml")).unwrap();
     let t = card.laminate.reference_thickness();
     let force = 1e-3;
-    let plate = RigidTool::new(
-        "plate",
-        square_plate(t / 2.0, -1.0),
-        ToolMotion::Force {
-            force: Vector3::new(0.0, 0.0, -force),
-            mass: 1e-9,
-        },
-        0.0,
-        t,
-    )
-    .unwrap();
-    let contact = ContactSettings {
-        offset: t / 2.0,
-        penalty_scale: 0.1,
-        max_penetration: t,
-    };
-    let mesh = rectangle(20.0, 20.0, 4, 4, DiagonalPattern::Right);
-    let model = Model::new(
-        mesh,
-        card.laminate.clone(),
-        card.density,
-        20.0,
-        Vector3::x(),
-        vec![],
-    )
-    .unwrap()
-    .with_tools(vec![plate], contact);
+    let plate = pressing_plate(t, force);
+    let model = free_sheet(&card, vec![plate]);
     let mass = card.density * t * 400.0;
     let acceleration = force / mass;
     // about a millimetre of travel, in 200 increments of at most T / 200

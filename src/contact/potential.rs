@@ -229,6 +229,28 @@ mod tests {
         max_penetration: 0.5,
     };
 
+    /// The pair at `y` touches, its gradient is the central difference of its energy and its
+    /// Hessian that of its gradient (case `k` in the messages).
+    fn assert_derivatives(k: usize, y: Vector3<f64>, at: impl Fn(Vector3<f64>) -> PairContact) {
+        let pair = at(y);
+        assert!(pair.normal_force > 0.0, "{k}: touching");
+        let h = 1e-6;
+        for d in 0..3 {
+            let mut step = Vector3::zeros();
+            step[d] = h;
+            let (plus, minus) = (at(y + step), at(y - step));
+            let slope = (plus.energy - minus.energy) / (2.0 * h);
+            assert!(
+                (slope - pair.gradient[d]).abs() < 1e-5 * pair.gradient.norm(),
+                "{k} {d}: {slope} against {}",
+                pair.gradient[d]
+            );
+            let column = (plus.gradient - minus.gradient) / (2.0 * h);
+            let error = (column - pair.hessian.column(d)).norm();
+            assert!(error < 1e-4 * pair.hessian.norm(), "{k} {d}: {error}");
+        }
+    }
+
     /// The gradient is the derivative of the energy and the Hessian that of the gradient,
     /// friction included, at points touching a faceted cap.
     #[test]
@@ -267,23 +289,7 @@ mod tests {
                 )
                 .unwrap()
             };
-            let pair = at(y);
-            assert!(pair.normal_force > 0.0, "{k}: touching");
-            let h = 1e-6;
-            for d in 0..3 {
-                let mut step = Vector3::zeros();
-                step[d] = h;
-                let (plus, minus) = (at(y + step), at(y - step));
-                let slope = (plus.energy - minus.energy) / (2.0 * h);
-                assert!(
-                    (slope - pair.gradient[d]).abs() < 1e-5 * pair.gradient.norm(),
-                    "{k} {d}: {slope} against {}",
-                    pair.gradient[d]
-                );
-                let column = (plus.gradient - minus.gradient) / (2.0 * h);
-                let error = (column - pair.hessian.column(d)).norm();
-                assert!(error < 1e-4 * pair.hessian.norm(), "{k} {d}: {error}");
-            }
+            assert_derivatives(k, y, at);
         }
     }
 
@@ -352,23 +358,7 @@ mod tests {
                 )
                 .unwrap()
             };
-            let pair = at(y);
-            assert!(pair.normal_force > 0.0, "{k}: touching");
-            let h = 1e-6;
-            for d in 0..3 {
-                let mut step = Vector3::zeros();
-                step[d] = h;
-                let (plus, minus) = (at(y + step), at(y - step));
-                let slope = (plus.energy - minus.energy) / (2.0 * h);
-                assert!(
-                    (slope - pair.gradient[d]).abs() < 1e-5 * pair.gradient.norm(),
-                    "{k} {d}: {slope} against {}",
-                    pair.gradient[d]
-                );
-                let column = (plus.gradient - minus.gradient) / (2.0 * h);
-                let error = (column - pair.hessian.column(d)).norm();
-                assert!(error < 1e-4 * pair.hessian.norm(), "{k} {d}: {error}");
-            }
+            assert_derivatives(k, y, at);
         }
     }
 

@@ -206,14 +206,16 @@ impl SweptProfile {
         let (base, radial, r) = self.meridian_frame(y);
         let q = [r, y.z - self.lift];
         let (index, foot) = self.nearest_foot(q);
-        let edge = self.profile_end(index, foot.end).filter(|e| e[0] > 0.0);
+        let edge = self
+            .profile_end(index, foot.end)
+            .is_some_and(|e| e[0] > 0.0);
         let to_q = [q[0] - foot.point[0], q[1] - foot.point[1]];
         let ahead = to_q[0] * foot.normal[0] + to_q[1] * foot.normal[1];
         let gap = to_q[0].hypot(to_q[1]);
         let (normal2, distance, meridian_turn) = match edge {
-            Some(_) if ahead > 0.0 && gap > 0.0 => ([to_q[0] / gap, to_q[1] / gap], gap, 1.0 / gap),
-            Some(_) => (foot.normal, ahead, 0.0),
-            None => {
+            true if ahead > 0.0 && gap > 0.0 => ([to_q[0] / gap, to_q[1] / gap], gap, 1.0 / gap),
+            true => (foot.normal, ahead, 0.0),
+            false => {
                 let k = foot.curvature;
                 (foot.normal, ahead, k / (1.0 + k * ahead))
             }
