@@ -7,6 +7,13 @@
 //! process.blank_holder_force=0 --set process.stroke=20 --set blank.element_size=h`): waviness
 //! 4.23, 2.24, 1.65, 1.55 mm and dominant wave number 8, 4 (8 close), 4, 4 for h = 8, 5.33, 4
 //! and 2.67 mm. The 8 mm mesh is too coarse for the waves; from 4 mm on they have converged.
+//!
+//! These runs are not quasi-static (on 4 mm cells the kinetic energy reaches 71 % of the
+//! internal work, 2026-12-04): the flange snaps off the die at 13–18 mm of stroke when the
+//! run has less inertia, and the waves at 20 mm depend on it (docs/solver.md, "Wrinkles
+//! without a holder"). What this test checks is the mesh convergence of the explicit
+//! solver's answer at the examples' settings; the solvers are compared before the snap in
+//! `tests/implicit_forming.rs`.
 
 mod common;
 
@@ -28,26 +35,8 @@ fn flange_waves(element_size: &str) -> (f64, usize) {
     let forming = FormingModel::new(&scenario).unwrap();
     let result = run::run(&forming, None, None);
     let state = result.outcome.as_ref().unwrap();
-    let ring: Vec<(f64, f64)> = forming
-        .model
-        .mesh
-        .nodes
-        .iter()
-        .zip(&state.positions)
-        .filter(|(x0, _)| (58.0..=72.0).contains(&x0.x.hypot(x0.y)))
-        .map(|(x0, x)| (x0.y.atan2(x0.x), x.z))
-        .collect();
-    let mean = ring.iter().map(|r| r.1).sum::<f64>() / ring.len() as f64;
-    let harmonic = |n: usize| {
-        let (c, s) = ring.iter().fold((0.0, 0.0), |(c, s), &(theta, z)| {
-            let a = n as f64 * theta;
-            (c + (z - mean) * a.cos(), s + (z - mean) * a.sin())
-        });
-        c.hypot(s) / ring.len() as f64
-    };
-    let dominant = (1..=24)
-        .max_by(|&a, &b| harmonic(a).total_cmp(&harmonic(b)))
-        .unwrap();
+    let harmonics = common::flange_harmonics(&forming.model, &state.positions);
+    let dominant = common::dominant_waves(&harmonics);
     (result.records.last().unwrap().wrinkles.waviness, dominant)
 }
 

@@ -239,3 +239,34 @@ pub fn square_plate(z: f64, side: f64) -> thermostamp::contact::TriangleSurface 
         triangles,
     }
 }
+
+/// Amplitudes (mm) of the Fourier harmonics `1..=24` of the flange's height around the part
+/// (entry `n - 1` for `n` waves): the heights at `x` of the nodes whose reference radius is
+/// 58–72 mm, against their angle around the punch's axis.
+pub fn flange_harmonics(model: &thermostamp::solver::Model, x: &[Vector3<f64>]) -> Vec<f64> {
+    let ring: Vec<(f64, f64)> = model
+        .mesh
+        .nodes
+        .iter()
+        .zip(x)
+        .filter(|(x0, _)| (58.0..=72.0).contains(&x0.x.hypot(x0.y)))
+        .map(|(x0, x)| (x0.y.atan2(x0.x), x.z))
+        .collect();
+    let mean = ring.iter().map(|r| r.1).sum::<f64>() / ring.len() as f64;
+    (1..=24)
+        .map(|n| {
+            let (c, s) = ring.iter().fold((0.0, 0.0), |(c, s), &(theta, z)| {
+                let a = n as f64 * theta;
+                (c + (z - mean) * a.cos(), s + (z - mean) * a.sin())
+            });
+            2.0 * c.hypot(s) / ring.len() as f64
+        })
+        .collect()
+}
+
+/// The number of waves of the largest of [`flange_harmonics`].
+pub fn dominant_waves(harmonics: &[f64]) -> usize {
+    1 + (0..harmonics.len())
+        .max_by(|&a, &b| harmonics[a].total_cmp(&harmonics[b]))
+        .unwrap()
+}
