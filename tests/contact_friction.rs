@@ -7,7 +7,7 @@ mod common;
 
 use nalgebra::Vector3;
 use std::sync::Arc;
-use thermostamp::contact::{ContactSettings, RigidTool, ToolMotion};
+use thermostamp::contact::{RigidTool, ToolMotion};
 use thermostamp::material::MaterialCard;
 use thermostamp::mesh::{rectangle, DiagonalPattern};
 use thermostamp::solver::{self, Constraint, Model, Motion, Observer, SolverSettings, State};
@@ -88,21 +88,7 @@ fn slide_against_coulomb(solve: impl Fn(&Model, f64, &mut History) -> State) {
         )
         .unwrap(),
     ];
-    let contact = ContactSettings {
-        offset: t / 2.0,
-        penalty_scale: 0.1,
-        max_penetration: t,
-    };
-    let model = Model::new(
-        mesh,
-        card.laminate.clone(),
-        card.density,
-        20.0,
-        Vector3::x(),
-        constraints,
-    )
-    .unwrap()
-    .with_tools(tools, contact);
+    let model = common::sheet_among_tools(&card, mesh, constraints, tools);
     let mut history = History::default();
     let state = solve(&model, end, &mut history);
     let sliding: Vec<_> = history
@@ -181,7 +167,6 @@ fn force_driven_holder_presses_with_its_force() {
     let card = MaterialCard::load(&common::repo_path("tests/data/stiff-yarn-fabric.toml")).unwrap();
     let t = card.laminate.reference_thickness();
     let (force, end) = (50.0, 0.02);
-    let mesh = rectangle(20.0, 20.0, 4, 4, DiagonalPattern::Right);
     let blank_mass = card.density * t * 400.0;
     let holder = ToolMotion::Force {
         force: Vector3::new(0.0, 0.0, force),
@@ -205,21 +190,7 @@ fn force_driven_holder_presses_with_its_force() {
         )
         .unwrap(),
     ];
-    let contact = ContactSettings {
-        offset: t / 2.0,
-        penalty_scale: 0.1,
-        max_penetration: t,
-    };
-    let model = Model::new(
-        mesh,
-        card.laminate.clone(),
-        card.density,
-        20.0,
-        Vector3::x(),
-        vec![],
-    )
-    .unwrap()
-    .with_tools(tools, contact);
+    let model = common::free_sheet(&card, tools);
     let settings = SolverSettings {
         end_time: end,
         time_step_safety: 0.9,

@@ -17,23 +17,18 @@
 
 mod common;
 
-use thermostamp::forming::{run, FormingModel, Scenario};
-
 /// Waviness (mm) and the dominant number of waves around the flange (nodes whose reference
 /// radius is 58–72 mm: Fourier harmonics 1–24 of their height).
 fn flange_waves(element_size: &str) -> (f64, usize) {
-    let scenario = Scenario::load(
-        &common::repo_path("examples/hemisphere.toml"),
+    let (forming, result) = common::form(
+        "examples/hemisphere.toml",
         &[
             format!("blank.element_size={element_size}"),
             "process.stroke=20".into(),
             "process.blank_holder_force=0".into(),
             "output.history_points=4".into(),
         ],
-    )
-    .unwrap();
-    let forming = FormingModel::new(&scenario).unwrap();
-    let result = run::run(&forming, None, None);
+    );
     let state = result.outcome.as_ref().unwrap();
     let harmonics = common::flange_harmonics(&forming.model, &state.positions);
     let dominant = common::dominant_waves(&harmonics);

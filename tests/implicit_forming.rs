@@ -6,7 +6,7 @@
 mod common;
 
 use thermostamp::forming::run::FormingRun;
-use thermostamp::forming::{run, FormingModel, Scenario};
+use thermostamp::forming::{FormingModel, Scenario};
 
 /// The shipped hemisphere on 10 mm quadrilaterals (256 cells) over 20 mm of stroke, by the
 /// solver of `file`.
@@ -16,10 +16,7 @@ fn hemisphere(file: &str) -> (FormingModel, FormingRun) {
         "process.stroke=20".into(),
         "output.history_points=20".into(),
     ];
-    let scenario = Scenario::load(&common::repo_path(file), &overrides).unwrap();
-    let forming = FormingModel::new(&scenario).unwrap();
-    let result = run::run(&forming, None, None);
-    (forming, result)
+    common::form(file, &overrides)
 }
 
 /// Shear angles cell by cell, punch force and draw-in at the end of the stroke, within the
@@ -83,13 +80,7 @@ fn implicit_hemisphere_without_a_holder_follows_the_flange_through_its_snap() {
         "process.stroke=14".into(),
         "output.history_points=28".into(),
     ];
-    let scenario = Scenario::load(
-        &common::repo_path("tests/data/hemisphere-implicit.toml"),
-        &overrides,
-    )
-    .unwrap();
-    let forming = FormingModel::new(&scenario).unwrap();
-    let result = run::run(&forming, None, None);
+    let (forming, result) = common::form("tests/data/hemisphere-implicit.toml", &overrides);
     let state = result.outcome.expect("every increment converges");
     assert!((state.time - forming.settings.end_time).abs() < 1e-9);
     let last = result.records.last().unwrap();
@@ -117,9 +108,7 @@ fn flange_without_holder(file: &str, extra: &[&str]) -> (Vec<f64>, f64) {
         "output.history_points=6".into(),
     ];
     overrides.extend(extra.iter().map(|s| s.to_string()));
-    let scenario = Scenario::load(&common::repo_path(file), &overrides).unwrap();
-    let forming = FormingModel::new(&scenario).unwrap();
-    let result = run::run(&forming, None, None);
+    let (forming, result) = common::form(file, &overrides);
     let state = result.outcome.as_ref().expect("the run reaches 12 mm");
     (
         common::flange_harmonics(&forming.model, &state.positions),

@@ -8,14 +8,13 @@ mod common;
 use common::{repo_path, square_plate, t300_card, thermostamp};
 use nalgebra::{DMatrix, DVector, Vector3};
 use thermostamp::contact::potential::FrictionLag;
-use thermostamp::contact::{ContactSettings, RigidTool, ToolMotion};
+use thermostamp::contact::{RigidTool, ToolMotion};
 use thermostamp::experiment::bias_extension::BiasExtension;
 use thermostamp::experiment::picture_frame::{PictureFrame, PictureFrameRow};
 use thermostamp::experiment::sheet_test::{SheetTest, SheetTestRun, TestProcess};
 use thermostamp::experiment::uniaxial::{UniaxialRow, UniaxialTension};
 use thermostamp::forming::{FormingModel, Scenario};
 use thermostamp::material::MaterialCard;
-use thermostamp::mesh::{rectangle, DiagonalPattern};
 use thermostamp::solver::implicit::{
     self, residual_and_tangent, ImplicitSettings, ImplicitStatistics,
 };
@@ -384,27 +383,6 @@ fn pressing_plate(t: f64, force: f64) -> RigidTool {
     .unwrap()
 }
 
-/// A free 20 x 20 mm sheet of `card` (4 x 4 cells, no bending, nothing held) among `tools`.
-fn free_sheet(card: &MaterialCard, tools: Vec<RigidTool>) -> Model {
-    let t = card.laminate.reference_thickness();
-    let contact = ContactSettings {
-        offset: t / 2.0,
-        penalty_scale: 0.1,
-        max_penetration: t,
-    };
-    let mesh = rectangle(20.0, 20.0, 4, 4, DiagonalPattern::Right);
-    Model::new(
-        mesh,
-        card.laminate.clone(),
-        card.density,
-        20.0,
-        Vector3::x(),
-        vec![],
-    )
-    .unwrap()
-    .with_tools(tools, contact)
-}
-
 impl Observer for Last {
     fn record(&mut self, _: &Model, state: &State) -> anyhow::Result<()> {
         self.0 = Some(state.clone());
@@ -435,7 +413,7 @@ fn a_sheet_pressed_onto_a_floor_is_solved_in_one_newton_step() {
         .unwrap(),
         pressing_plate(t, force),
     ];
-    let model = free_sheet(&card, tools);
+    let model = common::free_sheet(&card, tools);
     let mut settings = ImplicitSettings::new(1.0, 1.0);
     settings.max_increment = Some(4.0);
     let mut last = Last(None);
@@ -475,7 +453,7 @@ fn a_free_sheet_pushed_by_a_constant_force_accelerates_as_newton_says() {
     let t = card.laminate.reference_thickness();
     let force = 1e-3;
     let plate = pressing_plate(t, force);
-    let model = free_sheet(&card, vec![plate]);
+    let model = common::free_sheet(&card, vec![plate]);
     let mass = card.density * t * 400.0;
     let acceleration = force / mass;
     // about a millimetre of travel, in 200 increments of at most T / 200

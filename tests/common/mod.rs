@@ -270,3 +270,56 @@ pub fn dominant_waves(harmonics: &[f64]) -> usize {
         .max_by(|&a, &b| harmonics[a].total_cmp(&harmonics[b]))
         .unwrap()
 }
+
+/// A sheet of `card` on `mesh` (no bending; reference warp along x at 20 °C) held by
+/// `constraints`, among `tools` whose contact springs sit half a ply from its mid-plane
+/// (penalty scale 0.1, reach one ply).
+pub fn sheet_among_tools(
+    card: &MaterialCard,
+    mesh: thermostamp::mesh::Mesh,
+    constraints: Vec<thermostamp::solver::Constraint>,
+    tools: Vec<thermostamp::contact::RigidTool>,
+) -> thermostamp::solver::Model {
+    let t = card.laminate.reference_thickness();
+    let contact = thermostamp::contact::ContactSettings {
+        offset: t / 2.0,
+        penalty_scale: 0.1,
+        max_penetration: t,
+    };
+    thermostamp::solver::Model::new(
+        mesh,
+        card.laminate.clone(),
+        card.density,
+        20.0,
+        Vector3::x(),
+        constraints,
+    )
+    .unwrap()
+    .with_tools(tools, contact)
+}
+
+/// A free 20 x 20 mm sheet of `card` (4 x 4 cells, nothing held) among `tools`, as
+/// [`sheet_among_tools`].
+pub fn free_sheet(
+    card: &MaterialCard,
+    tools: Vec<thermostamp::contact::RigidTool>,
+) -> thermostamp::solver::Model {
+    use thermostamp::mesh::{rectangle, DiagonalPattern};
+    let mesh = rectangle(20.0, 20.0, 4, 4, DiagonalPattern::Right);
+    sheet_among_tools(card, mesh, vec![], tools)
+}
+
+/// The forming scenario `file` (relative to the repository) with the `--set` overrides
+/// `overrides`, run to its end: the model and the run's outcome and records.
+pub fn form(
+    file: &str,
+    overrides: &[String],
+) -> (
+    thermostamp::forming::FormingModel,
+    thermostamp::forming::run::FormingRun,
+) {
+    let scenario = thermostamp::forming::Scenario::load(&repo_path(file), overrides).unwrap();
+    let forming = thermostamp::forming::FormingModel::new(&scenario).unwrap();
+    let result = thermostamp::forming::run::run(&forming, None, None);
+    (forming, result)
+}
