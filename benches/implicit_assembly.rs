@@ -1,5 +1,5 @@
 //! The implicit solver's hot loops on the hemisphere pressed 10 mm into its tools
-//! (`tests/data/hemisphere-implicit.toml`): `cargo bench --bench implicit_assembly`.
+//! (`examples/hemisphere.toml`): `cargo bench --bench implicit_assembly`.
 //!
 //! For 8 mm and 4 mm cells (400 and 1,600 quadrilaterals), on the threads rayon is given
 //! (`RAYON_NUM_THREADS`): one residual with the consistent tangent (laminate, hourglass,
@@ -37,7 +37,7 @@ fn per_call(budget: Duration, mut f: impl FnMut()) -> f64 {
 }
 
 fn main() {
-    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/hemisphere-implicit.toml");
+    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/hemisphere.toml");
     println!(
         "{:>6} {:>9} {:>16} {:>16} {:>16} {:>16}",
         "cell", "elements", "tangent (ms)", "residual (ms)", "factorise (ms)", "solve (ms)"

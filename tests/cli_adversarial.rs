@@ -30,9 +30,9 @@ impl Fixtures {
     fn new() -> Self {
         let dir = scratch_dir("adversarial", "fixtures");
         let materials = repo_path("materials");
-        let scenario = std::fs::read_to_string(repo_path("examples/hemisphere.toml"))
+        let scenario = std::fs::read_to_string(repo_path("tests/data/hemisphere-explicit.toml"))
             .unwrap()
-            .replace("../materials/", &format!("{}/", materials.display()));
+            .replace("../../materials/", &format!("{}/", materials.display()));
         let card = std::fs::read_to_string(repo_path("materials/t300-5hs-pps.toml")).unwrap();
         Self {
             dir,
@@ -109,7 +109,7 @@ fn repo(relative: &str) -> String {
 /// Usage errors that clap finds, before any file is read.
 fn usage_cases(f: &Fixtures) -> Vec<Case> {
     let card = repo("materials/t300-5hs-pps.toml");
-    let example = repo("examples/hemisphere.toml");
+    let example = repo("tests/data/hemisphere-explicit.toml");
     vec![
         case("no command", &[], 2, &["Usage"]),
         case("unknown command", &["frobnicate"], 2, &["frobnicate"]),
@@ -487,7 +487,7 @@ fn virtual_test_cases(f: &Fixtures) -> Vec<Case> {
 
 /// Scenario files and their overrides for `run` (and `drape`).
 fn scenario_cases(f: &Fixtures) -> Vec<Case> {
-    let example = repo("examples/hemisphere.toml");
+    let example = repo("tests/data/hemisphere-explicit.toml");
     let run = |scenario: &str, extra: &[&str], out: &str| {
         let mut args = vec!["run".to_string(), scenario.to_string()];
         args.extend(extra.iter().map(|s| s.to_string()));

@@ -88,8 +88,6 @@ fn double_dome_example_runs_in_reduced_form() {
         "--set",
         "process.stroke=6",
         "--set",
-        "process.target_time_step=5e-6",
-        "--set",
         "output.frames=1",
         "--output",
         dir.to_str().unwrap(),

@@ -14,10 +14,10 @@ fn out_dir(name: &str) -> PathBuf {
     dir
 }
 
-/// `thermostamp run examples/hemisphere.toml --set ...`: exit code and standard error.
+/// `thermostamp run tests/data/hemisphere-explicit.toml --set ...`: exit code and standard error.
 fn hemisphere_with(name: &str, overrides: &[&str]) -> (Option<i32>, String) {
     let dir = out_dir(name);
-    let mut args = vec!["run", "examples/hemisphere.toml"];
+    let mut args = vec!["run", "tests/data/hemisphere-explicit.toml"];
     for o in overrides {
         args.extend(["--set", o]);
     }

@@ -18,13 +18,13 @@ fn out_dir(name: &str) -> PathBuf {
 
 /// A hemisphere run long enough to be stopped (a full run would take minutes): a row every
 /// hundred steps or so, a frame every fourth row.
-/// `process.time_scaling` of examples/hemisphere.toml.
+/// `process.time_scaling` of tests/data/hemisphere-explicit.toml.
 const EXAMPLE_TIME_SCALING: f64 = 10.0;
 
 fn long_forming_run(dir: &Path) -> Vec<String> {
     [
         "run",
-        "examples/hemisphere.toml",
+        "tests/data/hemisphere-explicit.toml",
         "--set",
         "blank.element_size=10",
         "--set",

@@ -104,41 +104,51 @@ fn assert_has(files: &[String], extensions: &[&str]) {
     }
 }
 
-/// The hemisphere example on 10 mm cells, 3 mm of stroke: the punch and the force-driven
-/// holder touch the blank, so the contact loads (which move the holder) and the element sums
-/// both feed the trajectory. 1 and 2 threads write the same bytes.
+/// The hemisphere example on 10 mm cells, 3 mm of stroke, on each solver: the punch and the
+/// force-driven holder touch the blank, so the contact loads (which move the holder) and the
+/// element sums (the explicit solver's forces, the implicit one's assembled residual and
+/// tangent) both feed the trajectory. 1 and 2 threads write the same bytes.
 #[test]
 fn forming_run_is_bit_identical_on_one_and_two_threads() {
-    let args = [
-        "run",
-        "examples/hemisphere.toml",
-        "--set",
-        "blank.element_size=10",
-        "--set",
-        "process.stroke=3",
-        "--set",
-        "output.frames=2",
-        "--set",
-        "output.history_points=6",
-    ];
-    let (one, two) = (out_dir("forming-1"), out_dir("forming-2"));
-    run_on_threads(&args, "1", &one);
-    run_on_threads(&args, "2", &two);
-    let files = assert_same_files(&one, &two);
-    assert_has(&files, &[".csv", ".vtu", ".pvd", ".inp"]);
-    let rows = assert_finite_cells(&one.join("forming.csv"));
-    assert!(rows >= 6, "{rows} rows");
-    let last = std::fs::read_to_string(one.join("forming.csv")).unwrap();
-    let punch: f64 = last
-        .lines()
-        .last()
-        .unwrap()
-        .split(',')
-        .nth(2)
-        .unwrap()
-        .parse()
-        .unwrap();
-    assert!(punch > 0.1, "the punch pushes the blank: {punch} N");
+    for (solver, scenario) in [
+        ("explicit", "tests/data/hemisphere-explicit.toml"),
+        ("implicit", "examples/hemisphere.toml"),
+    ] {
+        let args = [
+            "run",
+            scenario,
+            "--set",
+            "blank.element_size=10",
+            "--set",
+            "process.stroke=3",
+            "--set",
+            "output.frames=2",
+            "--set",
+            "output.history_points=6",
+        ];
+        let one = out_dir(&format!("forming-{solver}-1"));
+        let two = out_dir(&format!("forming-{solver}-2"));
+        run_on_threads(&args, "1", &one);
+        run_on_threads(&args, "2", &two);
+        let files = assert_same_files(&one, &two);
+        assert_has(&files, &[".csv", ".vtu", ".pvd", ".inp"]);
+        let rows = assert_finite_cells(&one.join("forming.csv"));
+        assert!(rows >= 6, "{solver}: {rows} rows");
+        let last = std::fs::read_to_string(one.join("forming.csv")).unwrap();
+        let punch: f64 = last
+            .lines()
+            .last()
+            .unwrap()
+            .split(',')
+            .nth(2)
+            .unwrap()
+            .parse()
+            .unwrap();
+        assert!(
+            punch > 0.1,
+            "{solver}: the punch pushes the blank: {punch} N"
+        );
+    }
 }
 
 /// A short bias-extension test on 1, 2 and 100,000 threads: the same bytes in every file, and

@@ -47,7 +47,7 @@ fn quadrant_maxima(forming: &FormingModel, x: &[Vector3<f64>]) -> [f64; 4] {
 /// draped on the same cap (`thermostamp drape`, 8.04°); see [`check_against_the_net`].
 #[test]
 fn hemisphere_shear_is_symmetric_and_follows_the_pin_jointed_net() {
-    check_against_the_net(&scenario("examples/hemisphere.toml", &[]));
+    check_against_the_net(&scenario("tests/data/hemisphere-explicit.toml", &[]));
 }
 
 /// The double dome, shortened to a 200 x 140 mm blank: the ends shear as the hemisphere does
@@ -55,7 +55,7 @@ fn hemisphere_shear_is_symmetric_and_follows_the_pin_jointed_net() {
 #[test]
 fn double_dome_shear_is_symmetric_and_follows_the_pin_jointed_net() {
     let scenario = scenario(
-        "examples/double-dome.toml",
+        "tests/data/double-dome-explicit.toml",
         &["blank.width=200", "blank.length=140"],
     );
     check_against_the_net(&scenario);

@@ -16,8 +16,11 @@ fn flange_wrinkles(holder: &str) -> Wrinkles {
         "output.history_points=10".into(),
     ];
     overrides.push(holder.into());
-    let scenario =
-        Scenario::load(&common::repo_path("examples/hemisphere.toml"), &overrides).unwrap();
+    let scenario = Scenario::load(
+        &common::repo_path("tests/data/hemisphere-explicit.toml"),
+        &overrides,
+    )
+    .unwrap();
     let forming = FormingModel::new(&scenario).unwrap();
     let result = run::run(&forming, None, None);
     assert!(result.outcome.is_ok(), "{:?}", result.outcome.err());
@@ -63,7 +66,11 @@ fn holder_force_keeps_the_flange_on_the_die() {
 /// exceeds half the ply, 90 % of it (82 % on the mesh's nodes).
 #[test]
 fn waviness_tells_waves_from_a_coned_flange() {
-    let scenario = Scenario::load(&common::repo_path("examples/hemisphere.toml"), &[]).unwrap();
+    let scenario = Scenario::load(
+        &common::repo_path("tests/data/hemisphere-explicit.toml"),
+        &[],
+    )
+    .unwrap();
     let forming = FormingModel::new(&scenario).unwrap();
     let model = &forming.model;
     let mut state = thermostamp::solver::State::at_rest(model, &forming.settings).unwrap();

@@ -30,7 +30,11 @@ fn scenario(short: bool, overrides: &[String]) -> Scenario {
         .map(|s| s.to_string())
         .chain(overrides.iter().cloned())
         .collect();
-    Scenario::load(&common::repo_path("examples/hemisphere.toml"), &all).unwrap()
+    Scenario::load(
+        &common::repo_path("tests/data/hemisphere-explicit.toml"),
+        &all,
+    )
+    .unwrap()
 }
 
 fn mesh(size: f64, pattern: &str, ply_angle: f64) -> Vec<String> {

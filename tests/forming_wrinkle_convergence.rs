@@ -3,7 +3,7 @@
 //! mesh once it resolves them. Long (about six minutes on 2 cores), so not in the default run:
 //! `cargo test --release --test forming_wrinkle_convergence -- --ignored`.
 //!
-//! Measured 2026-11-26 after 20 mm of stroke (`thermostamp run examples/hemisphere.toml --set
+//! Measured 2026-11-26 after 20 mm of stroke (`thermostamp run tests/data/hemisphere-explicit.toml --set
 //! process.blank_holder_force=0 --set process.stroke=20 --set blank.element_size=h`): waviness
 //! 4.23, 2.24, 1.65, 1.55 mm and dominant wave number 8, 4 (8 close), 4, 4 for h = 8, 5.33, 4
 //! and 2.67 mm. The 8 mm mesh is too coarse for the waves; from 4 mm on they have converged.
@@ -21,7 +21,7 @@ mod common;
 /// radius is 58–72 mm: Fourier harmonics 1–24 of their height).
 fn flange_waves(element_size: &str) -> (f64, usize) {
     let (forming, result) = common::form(
-        "examples/hemisphere.toml",
+        "tests/data/hemisphere-explicit.toml",
         &[
             format!("blank.element_size={element_size}"),
             "process.stroke=20".into(),

@@ -25,8 +25,8 @@ fn hemisphere(file: &str) -> (FormingModel, FormingRun) {
 /// apart, draw-in 0.02 mm (figures of the full-size part are in docs/solver.md).
 #[test]
 fn implicit_hemisphere_forms_the_part_the_explicit_solver_forms() {
-    let (model, explicit) = hemisphere("examples/hemisphere.toml");
-    let (_, implicit) = hemisphere("tests/data/hemisphere-implicit.toml");
+    let (model, explicit) = hemisphere("tests/data/hemisphere-explicit.toml");
+    let (_, implicit) = hemisphere("examples/hemisphere.toml");
     let reference = explicit.outcome.expect("explicit run");
     let state = implicit
         .outcome
@@ -80,7 +80,7 @@ fn implicit_hemisphere_without_a_holder_follows_the_flange_through_its_snap() {
         "process.stroke=14".into(),
         "output.history_points=28".into(),
     ];
-    let (forming, result) = common::form("tests/data/hemisphere-implicit.toml", &overrides);
+    let (forming, result) = common::form("examples/hemisphere.toml", &overrides);
     let state = result.outcome.expect("every increment converges");
     assert!((state.time - forming.settings.end_time).abs() < 1e-9);
     let last = result.records.last().unwrap();
@@ -122,15 +122,16 @@ fn flange_without_holder(file: &str, extra: &[&str]) -> (Vec<f64>, f64) {
 /// dominant wave number, the four lobes' amplitude and the waviness within 15 %, and the
 /// part still symmetric (no lobe on one side only). The explicit run at time scaling 3: its
 /// kinetic energy is 2 % of the internal work at 12 mm (more only over the first millimetres,
-/// where little work is done); at the examples' 10 its inertia lags the waves
+/// where little work is done); at 10 (`tests/data/hemisphere-explicit.toml`) its inertia lags the waves
 /// (docs/solver.md). Measured: four waves in both, amplitude 1.52 mm implicit against
 /// 1.65 mm explicit (1.64 mm at the physical speed), waviness 2.89 against 3.01 mm (3.11 mm).
 #[test]
 fn without_a_holder_both_solvers_form_the_same_flange_waves_before_the_snap() {
-    let (explicit, explicit_waviness) =
-        flange_without_holder("examples/hemisphere.toml", &["process.time_scaling=3"]);
-    let (implicit, implicit_waviness) =
-        flange_without_holder("tests/data/hemisphere-implicit.toml", &[]);
+    let (explicit, explicit_waviness) = flange_without_holder(
+        "tests/data/hemisphere-explicit.toml",
+        &["process.time_scaling=3"],
+    );
+    let (implicit, implicit_waviness) = flange_without_holder("examples/hemisphere.toml", &[]);
     let waves = common::dominant_waves(&explicit);
     assert_eq!(waves, 4, "explicit harmonics {explicit:?}");
     assert_eq!(
@@ -182,7 +183,7 @@ impl thermostamp::solver::Observer for Times {
 #[test]
 fn a_run_that_fails_at_once_reports_why() {
     let scenario = Scenario::load(
-        &common::repo_path("tests/data/hemisphere-implicit.toml"),
+        &common::repo_path("examples/hemisphere.toml"),
         &["blank.element_size=10".to_string()],
     )
     .unwrap();

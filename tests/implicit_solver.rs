@@ -103,11 +103,8 @@ fn forming_tangent_equals_differences_of_the_residual() {
     .iter()
     .map(|s| s.to_string())
     .collect();
-    let scenario = Scenario::load(
-        &repo_path("tests/data/hemisphere-implicit.toml"),
-        &overrides,
-    )
-    .unwrap_or_else(|e| panic!("{e}"));
+    let scenario = Scenario::load(&repo_path("examples/hemisphere.toml"), &overrides)
+        .unwrap_or_else(|e| panic!("{e}"));
     let forming = FormingModel::new(&scenario).unwrap();
     let mut model = forming.model.clone();
     model.constraints.clear();
@@ -329,7 +326,7 @@ fn uniaxial_and_picture_frame_tests_match_the_explicit_solver() {
 /// exit code 2.
 #[test]
 fn explicit_only_settings_are_refused() {
-    let scenario = repo_path("tests/data/hemisphere-implicit.toml");
+    let scenario = repo_path("examples/hemisphere.toml");
     let out = thermostamp(&[
         "run",
         scenario.to_str().unwrap(),

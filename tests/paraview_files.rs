@@ -182,11 +182,11 @@ fn every_paraview_file_reads_in_vtk_as_written() {
     }
     let (run, bias, drape) = (dir.join("run"), dir.join("bias"), dir.join("drape"));
     let quad = dir.join("quad");
-    // the hemisphere example on 10 mm cells cut into triangles, 4 mm of stroke at 10 mm/s,
-    // time scaling 10
+    // the hemisphere example on 10 mm cells cut into triangles, 4 mm of stroke at 10 mm/s, on
+    // the explicit solver with time scaling 10
     run_ok(&[
         "run",
-        "examples/hemisphere.toml",
+        "tests/data/hemisphere-explicit.toml",
         "--set",
         "blank.pattern=right",
         "--set",
@@ -200,7 +200,7 @@ fn every_paraview_file_reads_in_vtk_as_written() {
         "--output",
         run.to_str().unwrap(),
     ]);
-    // the same on quadrilaterals, one frame at the end
+    // the same on quadrilaterals with the example's implicit solver, one frame at the end
     run_ok(&[
         "run",
         "examples/hemisphere.toml",

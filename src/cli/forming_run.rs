@@ -13,6 +13,7 @@ use crate::io::output_folder::ProductFiles;
 use crate::io::plot::{write_map_png, write_png, LinePlot, LineStyle, MapPlot, Series};
 use crate::io::vtk::PvdSeries;
 use crate::io::CsvStream;
+use crate::solver::estimate::format_bytes;
 use crate::solver::SolverKind;
 use std::path::{Path, PathBuf};
 
@@ -52,8 +53,9 @@ fn forming(args: &Args) -> anyhow::Result<()> {
     match forming.solver {
         SolverKind::Explicit => eprintln!("{}", forming.estimate.describe()),
         SolverKind::Implicit => eprintln!(
-            "implicit quasi-static run of {} elements at the physical punch speed",
-            forming.model.elements.len()
+            "implicit quasi-static run of {} elements at the physical punch speed, {} of memory",
+            forming.model.elements.len(),
+            format_bytes(forming.estimate.memory)
         ),
     }
     let stop = interrupt_flag()?;
