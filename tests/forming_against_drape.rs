@@ -15,7 +15,7 @@ use thermostamp::forming::{run, FormingModel, Scenario};
 /// force-driven holder was damped it rang on the flange and pushed this to 5-10 %).
 fn scenario(example: &str, more: &[&str]) -> Scenario {
     let overrides = [
-        "blank.card=../tests/data/forming-fabric.toml",
+        "blank.card=forming-fabric.toml",
         "blank.element_size=10",
         "process.stroke=15",
         "process.punch_speed=50",

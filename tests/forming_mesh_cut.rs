@@ -18,7 +18,7 @@ use thermostamp::forming::{run, FormingModel, Scenario};
 /// when `short`.
 fn scenario(short: bool, overrides: &[String]) -> Scenario {
     let shortened = [
-        "blank.card=../tests/data/forming-fabric.toml",
+        "blank.card=forming-fabric.toml",
         "process.stroke=15",
         "process.punch_speed=50",
         "process.time_scaling=1",
