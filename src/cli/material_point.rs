@@ -10,7 +10,7 @@ use anyhow::Context;
 use clap::ValueEnum;
 use nalgebra::{Matrix2, Matrix3};
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[derive(clap::Args, Debug)]
 #[command(after_help = "History columns:\n  \
@@ -73,14 +73,14 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
                 })?,
                 _ => card.fabric.as_ref(),
             };
-            let response = drive_layer(law, fibres, &history).map_err(|f| locate(&table, f))?;
+            let response = drive_layer(law, fibres, &history).map_err(|f| locate(&table, f, &args.card))?;
             (&LAYER_OUTPUT, response.iter().map(layer_row).collect())
         }
         LayerChoice::Laminate => {
             let table = read_csv_table(&args.history, &LAMINATE_COLUMNS)?;
             let history = membrane_history(&table)?;
             let response =
-                drive_laminate(&card.laminate, fibres, &history).map_err(|f| locate(&table, f))?;
+                drive_laminate(&card.laminate, fibres, &history).map_err(|f| locate(&table, f, &args.card))?;
             (
                 &LAMINATE_OUTPUT,
                 response.iter().map(laminate_row).collect(),
@@ -125,12 +125,13 @@ fn write_output(path: Option<&PathBuf>, header: &[&str], rows: &[Vec<f64>]) -> a
     }
 }
 
-/// Puts the history file and line on a failure of the material.
-fn locate(table: &CsvTable, failure: PointFailure) -> InputError {
+/// Puts the history file and line on a failure of the material, and names the card whose law
+/// failed there (a temperature outside its tables is the card's as much as the history's).
+fn locate(table: &CsvTable, failure: PointFailure, card: &Path) -> InputError {
     InputError::at_line(
         &table.origin,
         table.lines[failure.index],
-        failure.error.to_string(),
+        format!("{} (material card {})", failure.error, card.display()),
     )
 }
 
