@@ -8,25 +8,31 @@ mod common;
 use common::{repo_path, scratch_dir, thermostamp};
 use std::path::{Path, PathBuf};
 use thermostamp::fit::synthetic::{bias_extension_curve, Lcg};
-use thermostamp::material::fabric::ShearInteraction;
+use thermostamp::material::fabric::{ShearInteraction, ShearTerm};
 use thermostamp::material::MaterialCard;
 
 const TRUTH: [f64; 3] = [0.02, 0.01, 0.2];
 
 /// A noiseless 150 x 450 mm curve of the stiff-yarn test fabric's 0.3 mm layer.
 fn synthetic_curve(dir: &Path) -> PathBuf {
-    let law = ShearInteraction::new(TRUTH.to_vec());
+    curve_of(
+        &ShearInteraction::new(TRUTH.to_vec()),
+        &dir.join("bias.csv"),
+    )
+}
+
+/// A noiseless 150 x 450 mm curve of `law` on a 0.3 mm layer, up to 52°, written to `path`.
+fn curve_of(law: &ShearInteraction, path: &Path) -> PathBuf {
     let text = bias_extension_curve(
-        &law,
+        law,
         0.3,
         (150.0, 450.0),
         (52f64.to_radians(), 60),
         0.0,
         &mut Lcg::new(1),
     );
-    let path = dir.join("bias.csv");
-    std::fs::write(&path, text).unwrap();
-    path
+    std::fs::write(path, text).unwrap();
+    path.to_path_buf()
 }
 
 fn args<'a>(data: &'a str, card: &'a str, output: &'a str) -> Vec<&'a str> {
@@ -103,6 +109,102 @@ fn fits_the_shear_key_and_keeps_the_rest_of_the_card() {
         String::from_utf8_lossy(&out.stderr)
     );
     assert_eq!(std::fs::read_to_string(&refit).unwrap(), after);
+}
+
+/// `--terms friction,1,3`: a curve made from a law with a friction-like term gives back its
+/// force within 1 % from 2° on; the card gets `shear_friction` and its onset, and loses them
+/// when fitted again with the polynomial alone. A fit that softens, a negative friction
+/// coefficient, an unknown or repeated term and `locking` without its angle are refused with
+/// exit code 2, naming the option.
+#[test]
+fn friction_term_is_fitted_written_and_refused_where_meaningless() {
+    let dir = scratch_dir("fit-shear", "friction");
+    let truth = ShearInteraction::from_terms(vec![
+        (ShearTerm::friction(), 0.01),
+        (ShearTerm::Power(1), 0.02),
+        (ShearTerm::Power(3), 0.2),
+    ]);
+    let data = curve_of(&truth, &dir.join("friction.csv"));
+    let card = repo_path("tests/data/stiff-yarn-fabric.toml");
+    let output = dir.join("fitted.toml");
+    let (data, card, output_s) = (
+        data.to_str().unwrap(),
+        card.to_str().unwrap(),
+        output.to_str().unwrap(),
+    );
+    let mut a = args(data, card, output_s);
+    a.extend(["--terms", "friction,1,3"]);
+    let stdout = common::run_ok(&a);
+    assert!(
+        stdout.contains("friction") && stdout.contains("% of the mean"),
+        "{stdout}"
+    );
+    let fitted = MaterialCard::load(&output).unwrap();
+    for g in [2.0, 5.0, 20.0, 50.0] {
+        let g = f64::to_radians(g);
+        let (a, b) = (
+            fitted.fabric.shear.normalised_shear_force(0.3, g),
+            truth.normalised_shear_force(0.3, g),
+        );
+        assert!((a - b).abs() < 0.01 * b, "{a} vs {b}");
+    }
+    let written = std::fs::read_to_string(&output).unwrap();
+    assert!(
+        written.contains("shear_friction = ") && written.contains("shear_friction_onset = 1.0")
+    );
+    let refit = dir.join("refit.toml");
+    let mut again = args(data, output_s, refit.to_str().unwrap());
+    again.extend(["--terms", "3"]);
+    assert!(thermostamp(&again).status.success());
+    let polynomial = std::fs::read_to_string(&refit).unwrap();
+    assert!(!polynomial.contains("shear_friction"), "{polynomial}");
+    assert!(MaterialCard::load(&refit)
+        .unwrap()
+        .fabric
+        .shear
+        .friction()
+        .is_none());
+
+    let refused = |extra: &[&str], expected: &[&str]| {
+        let mut a = args(data, card, output_s);
+        a.extend(extra);
+        let out = thermostamp(&a);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{extra:?}: {stderr}");
+        assert_eq!(stderr.trim().lines().count(), 1, "{extra:?}: {stderr}");
+        for e in expected {
+            assert!(stderr.contains(e), "{extra:?}: {stderr}");
+        }
+    };
+    refused(&["--terms", "friction,1,twist"], &["--terms", "twist"]);
+    refused(&["--terms", "1,friction,1"], &["--terms", "named twice"]);
+    refused(&["--terms", "0"], &["--terms", "at least one"]);
+    refused(&["--terms", "1,locking"], &["--locking-angle"]);
+    refused(
+        &["--terms", "1,locking", "--locking-angle", "95"],
+        &["--locking-angle 95"],
+    );
+    refused(
+        &["--terms", "friction", "--friction-onset", "0"],
+        &["--friction-onset"],
+    );
+    // a curve that turns down: the polynomial that follows it softens inside the fitted range
+    let falling = dir.join("falling.csv");
+    let mut text = String::from("displacement_mm,force_N\n0,0\n");
+    for i in 1..=40 {
+        let d = 2.0 * f64::from(i);
+        text.push_str(&format!("{d},{}\n", 10.0 * (d / 40.0) * (2.0 - d / 40.0)));
+    }
+    std::fs::write(&falling, text).unwrap();
+    let mut a = args(falling.to_str().unwrap(), card, output_s);
+    a.extend(["--terms", "1,2"]);
+    let out = thermostamp(&a);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("falls as the shear grows") || stderr.contains("negative"),
+        "{stderr}"
+    );
 }
 
 #[test]
@@ -293,8 +395,14 @@ fn shipped_twintex_card_is_the_fit_of_the_benchmark_curve() {
         output.to_str().unwrap(),
         "--plot",
         plot.to_str().unwrap(),
+        "--terms",
+        "friction,1,3",
+        "--friction-onset",
+        "3",
+        "--max-shear",
+        "35",
     ]);
-    assert!(stdout.contains("points: 54"), "{stdout}");
+    assert!(stdout.contains("points: 42"), "{stdout}");
     let shipped = std::fs::read_to_string(repo_path("materials/twintex-plain-weave.toml")).unwrap();
     assert_eq!(std::fs::read_to_string(&output).unwrap(), shipped);
     assert!(std::fs::metadata(&plot).unwrap().len() > 1000);

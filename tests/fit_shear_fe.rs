@@ -9,12 +9,14 @@ use thermostamp::experiment::kinematics::{
     bias_extension_displacement, bias_extension_shear_angle,
 };
 use thermostamp::experiment::sheet_test::SheetTest;
-use thermostamp::fit::shear::{fit_shear, read_force_curve, ForceCurve, ShearTest};
+use thermostamp::fit::shear::{
+    fit_shear, polynomial_terms, read_force_curve, ForceCurve, ShearTest,
+};
 use thermostamp::fit::shear_fe::{
     analytic_force, laminate_with_shear, refine_shear_fe, surrogate_jacobian, FeRun,
     RefineSettings, ShearFeError, ShearFeFit, Stop,
 };
-use thermostamp::material::fabric::ShearInteraction;
+use thermostamp::material::fabric::{ShearInteraction, ShearTerm};
 use thermostamp::material::MaterialCard;
 
 const CARD: &str = "materials/twintex-plain-weave.toml";
@@ -55,32 +57,42 @@ fn shear_force_error(c: &[f64], truth: &[f64], thickness: f64, max_deg: u32) -> 
     shear_law_error(&a, &b, thickness, (1..=max_deg / 5).map(|k| 5 * k))
 }
 
-/// `dF_an/dc_k` equals central differences of the analytic forward model.
+/// `dF_an/dc_k` equals central differences of the analytic forward model, for every kind of
+/// term (friction-like, polynomial, locking past 40°).
 #[test]
 fn surrogate_jacobian_is_the_derivative_of_the_analytic_model() {
     let (w, h, t) = (150.0, 450.0, 1.2);
-    let c = [0.0162608, -0.0277939, 0.0442273];
-    let d: Vec<f64> = [2.0, 10.0, 30.0, 60.0, 90.0].to_vec();
-    let jacobian = surrogate_jacobian(w, h, t, &d, c.len());
+    let terms = [
+        ShearTerm::friction(),
+        ShearTerm::Power(1),
+        ShearTerm::Power(2),
+        ShearTerm::Power(3),
+        ShearTerm::Locking {
+            angle: 40f64.to_radians(),
+        },
+    ];
+    let c = [0.004, 0.0162608, -0.0277939, 0.0442273, 0.5];
+    let d: Vec<f64> = [2.0, 10.0, 30.0, 60.0, 90.0, 140.0].to_vec();
+    let analytic_force =
+        |c: &[f64], d: f64| analytic_force(w, h, t, &ShearInteraction::of(&terms, c), d);
+    let jacobian = surrogate_jacobian(w, h, t, &d, &terms);
     for (i, &di) in d.iter().enumerate() {
         for k in 0..c.len() {
             let step = 1e-4;
             let (mut up, mut down) = (c, c);
             up[k] += step;
             down[k] -= step;
-            let difference = (analytic_force(w, h, t, &up, di)
-                - analytic_force(w, h, t, &down, di))
-                / (2.0 * step);
+            let difference = (analytic_force(&up, di) - analytic_force(&down, di)) / (2.0 * step);
             let exact = jacobian[(i, k)];
             assert!(
                 (exact - difference).abs() <= 1e-7 * exact.abs().max(1e-3),
-                "d = {di}, k = {}: {exact} vs {difference}",
-                k + 1
+                "d = {di}, {:?}: {exact} vs {difference}",
+                terms[k]
             );
         }
         // linear in c: the Jacobian times c is the force itself
         let force: f64 = (0..c.len()).map(|k| jacobian[(i, k)] * c[k]).sum();
-        let direct = analytic_force(w, h, t, &c, di);
+        let direct = analytic_force(&c, di);
         assert!((force - direct).abs() < 1e-12 * direct.abs().max(1.0));
     }
 }
@@ -88,7 +100,7 @@ fn surrogate_jacobian_is_the_derivative_of_the_analytic_model() {
 /// The FE force curve of `card` with coefficients `c`, every second record, as measured data.
 fn fe_curve(settings: &RefineSettings, card: &MaterialCard, c: &[f64], end: f64) -> ForceCurve {
     let test = settings.bias_extension(card, end).unwrap();
-    let laminate = laminate_with_shear(card, c).unwrap();
+    let laminate = laminate_with_shear(card, &ShearInteraction::new(c.to_vec())).unwrap();
     let run = test.run(&laminate, card.density, None, None).unwrap();
     assert!(run.run.outcome.is_ok());
     let rows: Vec<_> = run.rows.iter().step_by(2).collect();
@@ -131,7 +143,8 @@ fn refinement_recovers_the_coefficients_behind_an_fe_curve() {
         width: w,
         length: h,
     };
-    let analytic = fit_shear(&data, &test, t, truth.len(), max_shear).unwrap();
+    let terms = polynomial_terms(truth.len() as u32);
+    let analytic = fit_shear(&data, &test, t, &terms, max_shear).unwrap();
     let start = analytic.result.parameters.clone();
     let start_error = shear_force_error(&start, &truth, t, max_deg);
     println!(
@@ -139,7 +152,7 @@ fn refinement_recovers_the_coefficients_behind_an_fe_curve() {
         100.0 * start_error
     );
 
-    let fit = refine_shear_fe(&data, &card, &start, &settings, &mut print_run).unwrap();
+    let fit = refine_shear_fe(&data, &card, &analytic.law(), &settings, &mut print_run).unwrap();
     let error = shear_force_error(&fit.coefficients, &truth, t, max_deg);
     println!(
         "refined {:?} ± {:?} ({:?} after {} iterations): F_sh off by up to {:.2} %",
@@ -178,7 +191,8 @@ fn error_of(
     settings: &RefineSettings,
 ) -> String {
     let mut runs = 0;
-    let e = refine_shear_fe(curve, card, start, settings, &mut |_| runs += 1)
+    let start = ShearInteraction::new(start.to_vec());
+    let e = refine_shear_fe(curve, card, &start, settings, &mut |_| runs += 1)
         .unwrap_err()
         .to_string();
     assert_eq!(runs, 0, "{e}: no FE run for bad input");
@@ -279,7 +293,8 @@ fn failed_fe_run_is_an_error() {
         force: d.iter().map(|d| 0.1 * d).collect(),
         displacement: d,
     };
-    let e = refine_shear_fe(&curve, &card, &[0.1, 0.0, 0.5], &settings, &mut |_| {}).unwrap_err();
+    let start = ShearInteraction::new(vec![0.1, 0.0, 0.5]);
+    let e = refine_shear_fe(&curve, &card, &start, &settings, &mut |_| {}).unwrap_err();
     assert!(matches!(e, ShearFeError::FeRun { iteration: 0, .. }), "{e}");
     assert!(e.to_string().contains("not quasi-static"), "{e}");
 }
@@ -293,7 +308,7 @@ fn failed_fe_run_is_an_error() {
 fn benchmark_curve_before_and_after_refinement() {
     let card = twintex();
     let data = read_force_curve(&repo_path(DATA)).unwrap();
-    let start = card.fabric.shear.coefficients().to_vec();
+    let start = card.fabric.shear.clone();
     // (largest angle, relative floor): the default weights, then equal weights
     for (max_deg, floor) in [(35.0f64, 0.05), (50.0, 0.05), (35.0, 1.0)] {
         let clock = std::time::Instant::now();
@@ -305,6 +320,7 @@ fn benchmark_curve_before_and_after_refinement() {
             Err(ShearFeError::NotConverged { runs, .. }) => {
                 println!("not converged");
                 ShearFeFit {
+                    terms: vec![],
                     coefficients: vec![],
                     standard_errors: vec![],
                     runs,

@@ -13,7 +13,7 @@ mod common;
 use common::{repo_path, run_ok, scratch_dir, shear_law_error};
 use thermostamp::experiment::picture_frame::PictureFrame;
 use thermostamp::experiment::sheet_test::SheetTest;
-use thermostamp::fit::shear::{fit_shear, ForceCurve, ShearTest};
+use thermostamp::fit::shear::{fit_shear, polynomial_terms, ForceCurve, ShearTest};
 use thermostamp::fit::shear_matrix::{matrix_layers, subtract_matrix, TestConditions};
 use thermostamp::material::fabric::ShearInteraction;
 use thermostamp::material::MaterialCard;
@@ -69,8 +69,8 @@ fn fit_both_ways(card: &MaterialCard, curve: &ForceCurve, speed: f64) -> (f64, f
         curve.displacement[last], share[last], curve.force[last]
     );
     let max = MAX_SHEAR_DEG.to_radians();
-    let subtracted = fit_shear(&fabric, &FRAME, thickness, 3, max).unwrap();
-    let raw = fit_shear(curve, &FRAME, thickness, 3, max).unwrap();
+    let subtracted = fit_shear(&fabric, &FRAME, thickness, &polynomial_terms(3), max).unwrap();
+    let raw = fit_shear(curve, &FRAME, thickness, &polynomial_terms(3), max).unwrap();
     let errors = (
         law_error(&subtracted.law(), card, thickness),
         law_error(&raw.law(), card, thickness),

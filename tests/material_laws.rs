@@ -8,7 +8,9 @@ use nalgebra::{Matrix3, Vector3};
 use proptest::prelude::*;
 use std::f64::consts::FRAC_PI_2;
 use thermostamp::experiment::material_point::{drive_layer, matrix_uniaxial_stress, PointSample};
-use thermostamp::material::fabric::{shear_angle, ShearInteraction, YarnTension, SLACK_BAND};
+use thermostamp::material::fabric::{
+    shear_angle, ShearInteraction, ShearTerm, YarnTension, SLACK_BAND,
+};
 use thermostamp::material::{
     cauchy_stress, FibreDirections, MaterialError, MaterialLaw, PointKinematics, TemperatureTable,
     ViscoHyperelasticMatrix, WovenFabric,
@@ -28,6 +30,32 @@ fn unbalanced_fabric() -> WovenFabric {
         YarnTension::new(vec![4.0e4, 2.0e6], 1e-3),
         YarnTension::new(vec![1.0e4, 5.0e5, 3.0e7], 1e-3),
         ShearInteraction::new(vec![0.25, 0.1, 2.0]),
+    )
+}
+
+/// The unbalanced fabric with every kind of shear term (docs/model.md §3): friction-like (onset
+/// 2°), polynomial and locking beyond 40°.
+fn fabric_with_every_shear_term() -> WovenFabric {
+    let fabric = unbalanced_fabric();
+    WovenFabric::new(
+        fabric.warp,
+        fabric.weft,
+        ShearInteraction::from_terms(vec![
+            (
+                ShearTerm::Friction {
+                    onset: 2f64.to_radians(),
+                },
+                0.3,
+            ),
+            (ShearTerm::Power(1), 0.25),
+            (ShearTerm::Power(3), 2.0),
+            (
+                ShearTerm::Locking {
+                    angle: 40f64.to_radians(),
+                },
+                20.0,
+            ),
+        ]),
     )
 }
 
@@ -71,16 +99,17 @@ proptest! {
         angle in 0.0..180.0f64,
         r in prop::array::uniform3(-3.0..3.0f64),
     ) {
-        let law = unbalanced_fabric();
         let fibres = FibreDirections::in_plane(angle.to_radians());
         // shear the material frame, then rotate it in the plane to the fibre angle
         let to_fibres = rotation([0.0, 0.0, angle.to_radians()]);
         let f = rotation(r) * to_fibres * trellis(gamma.to_radians(), la, lb, 1.1) * to_fibres.transpose();
         let p = point(&f, &Matrix3::zeros(), fibres);
-        let s = law.second_piola_kirchhoff(&p).unwrap();
-        let w = |c: &Matrix3<f64>| law.strain_energy(&PointKinematics { c: *c, ..p }).unwrap();
-        let s_fd = twice_gradient_by_differences(w, &p.c, 1e-7);
-        prop_assert!(relative_difference(&s, &s_fd, s.amax().max(1.0)) < 1e-6, "{s} vs {s_fd}");
+        for law in [unbalanced_fabric(), fabric_with_every_shear_term()] {
+            let s = law.second_piola_kirchhoff(&p).unwrap();
+            let w = |c: &Matrix3<f64>| law.strain_energy(&PointKinematics { c: *c, ..p }).unwrap();
+            let s_fd = twice_gradient_by_differences(w, &p.c, 1e-7);
+            prop_assert!(relative_difference(&s, &s_fd, s.amax().max(1.0)) < 1e-6, "{s} vs {s_fd}");
+        }
         let measured = shear_angle(&p.c, &fibres).to_degrees();
         prop_assert!((measured - gamma).abs() < 1e-9, "shear angle {measured} vs {gamma}");
     }
@@ -172,13 +201,15 @@ proptest! {
         let card = t300_card();
         let matrix = card.matrix.as_deref().unwrap();
         let fabric = unbalanced_fabric();
+        let every_term = fabric_with_every_shear_term();
         let fibres = FibreDirections::in_plane(0.4);
         let to_fibres = rotation([0.0, 0.0, 0.4]);
         let sheared = to_fibres * trellis(gamma.to_radians(), la, lb, 1.0) * to_fibres.transpose();
-        let cases: [(&dyn MaterialLaw, PointKinematics, f64); 2] = [
+        let cases: [(&dyn MaterialLaw, PointKinematics, f64); 3] = [
             (matrix, point(&f, &f_dot, fibres), 1e-6),
             // at 1e-7 the rounding of the stress over the step reached 1e-5 of the derivative
             (&fabric, point(&sheared, &Matrix3::zeros(), fibres), 1e-6),
+            (&every_term, point(&sheared, &Matrix3::zeros(), fibres), 1e-6),
         ];
         let direction = (symmetric(dc), symmetric(dc_dot));
         for (law, p, h) in cases {

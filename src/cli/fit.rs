@@ -1,7 +1,7 @@
 //! `thermostamp fit ...`: parameter identification from test curves (docs/model.md §5):
 //! `fit matrix` and `fit shear` here, `fit fabric-tension` in `fit_fabric_tension.rs`.
 
-use crate::fit::card_key::{replace_key, toml_array, FIT_MARKER};
+use crate::fit::card_key::{remove_key, replace_key, toml_array, toml_float, FIT_MARKER};
 use crate::fit::card_section::{matrix_section, replace_matrix_section};
 use crate::fit::matrix::{fit_matrix, uniaxial_stress, BulkRule, Eta1, TemperatureFit};
 use crate::fit::shear::{
@@ -11,6 +11,8 @@ use crate::fit::shear_fe::{refine_shear_fe, FeRun, RefineSettings, ShearFeFit, S
 use crate::fit::shear_matrix::{matrix_layers, subtract_matrix, TestConditions};
 use crate::fit::tension_data::{read_manifest, TensionCurve};
 use crate::io::plot::{write_png, LinePlot, LineStyle, Series};
+use crate::material::fabric::{ShearInteraction, ShearTerm};
+use crate::material::fabric_shear::DEFAULT_FRICTION_ONSET_DEG;
 use crate::material::{MaterialCard, TemperatureTable};
 use anyhow::Context;
 use clap::Subcommand;
@@ -22,7 +24,8 @@ pub enum FitCommand {
     Matrix(MatrixArgs),
     /// Yarn tension coefficients A_k of [fabric] from strip tension tests along warp / weft.
     FabricTension(super::fit_fabric_tension::FabricTensionArgs),
-    /// Shear coefficients c_k of [fabric] shear from a bias-extension or picture-frame curve.
+    /// Shear law of [fabric] (polynomial c_k, friction-like, locking terms) from a bias-extension
+    /// or picture-frame curve.
     Shear(ShearArgs),
 }
 
@@ -38,7 +41,12 @@ pub enum ShearTestKind {
     Bias extension (default): --width W --length H (free length, H/W >= 2); the normalised\n\
     shear force of Cao et al. 2008 is solved recursively from small angles (docs/model.md §5).\n\
     Picture frame: --frame-side L (pin to pin) [--fabric-side, default L].\n\
-    Model: F_sh(gamma) = 2 t_B sin(gamma) W_s'(sin^2 gamma), W_s = sum_k c_k I10^k.\n\
+    Model: F_sh(gamma) = 2 t_B sin(gamma) W_s'(sin^2 gamma), W_s(I10) a sum of the --terms:\n\
+    k = c_k I10^k; friction = k_0 (sqrt(I10 + eps^2) - eps), eps = sin(--friction-onset), a\n\
+    nearly constant shear force t_B k_0 from the first degrees; locking = (k_l/3)\n\
+    <I10 - sin^2(--locking-angle)>^3 (docs/model.md §3). A fit whose force falls as the shear\n\
+    grows within the fitted range, or with a negative friction or locking coefficient, is\n\
+    refused.\n\
     A card with matrix layers (a prepreg) needs --temperature and --speed of the test: the\n\
     layers' force, driven through the test's pin-jointed kinematics, is subtracted first.\n\
     --refine-fe (bias extension): starting from that fit, runs the FE bias-extension test\n\
@@ -77,9 +85,18 @@ pub struct ShearArgs {
     /// Crosshead speed of the test (mm/s); no default: needed when the card has matrix layers.
     #[arg(long, allow_negative_numbers = true)]
     speed: Option<f64>,
-    /// Number of coefficients c_1..c_m.
-    #[arg(long, default_value_t = 3)]
-    terms: usize,
+    /// Terms of W_s to fit, comma-separated: `friction`, `locking` and powers `k` of c_k I10^k
+    /// (e.g. `friction,1,2,3`); a single number m alone means c_1..c_m.
+    #[arg(long, default_value = "3")]
+    terms: String,
+    /// Onset of the friction-like term (degrees): eps = sin(onset); its force is 71 % of its
+    /// plateau there.
+    #[arg(long, allow_negative_numbers = true, default_value_t = DEFAULT_FRICTION_ONSET_DEG)]
+    friction_onset: f64,
+    /// Locking angle of the locking term (degrees); no default, needed with `locking` in
+    /// --terms.
+    #[arg(long, allow_negative_numbers = true)]
+    locking_angle: Option<f64>,
     /// Largest shear angle fitted (degrees).
     #[arg(long, allow_negative_numbers = true, default_value_t = 50.0)]
     max_shear: f64,
@@ -163,33 +180,22 @@ fn run_shear(args: &ShearArgs) -> anyhow::Result<()> {
     let measured = read_force_curve(&args.data)?;
     let matrix = matrix_share(args, &card, &measured, &test)?;
     let curve = matrix.as_ref().map_or(&measured, |m| &m.fabric);
-    let fit = fit_shear(
-        curve,
-        &test,
-        thickness,
-        args.terms,
-        args.max_shear.to_radians(),
-    )?;
+    let terms = shear_terms(args)?;
+    let fit = fit_shear(curve, &test, thickness, &terms, args.max_shear.to_radians())?;
     print_shear_table(&fit, matrix.as_ref());
     let refined = if args.refine_fe {
         Some(refine(args, &card, &measured, &fit)?)
     } else {
         None
     };
-    let (coefficients, mut provenance) = match &refined {
-        Some(r) => (r.coefficients.clone(), refined_provenance(args, r)),
-        None => (fit.result.parameters.clone(), Vec::new()),
+    let (law, mut provenance) = match &refined {
+        Some(r) => (r.law(), refined_provenance(args, r)),
+        None => (fit.law(), Vec::new()),
     };
     provenance.splice(0..0, shear_provenance(args, &fit, matrix.as_ref()));
     let origin = args.output.display().to_string();
-    let written = replace_key(
-        &text,
-        "fabric",
-        "shear",
-        &toml_array(&coefficients),
-        &provenance,
-    )
-    .map_err(|e| anyhow::anyhow!("{}: {e}", args.card.display()))?;
+    let written = write_shear_law(&text, &law, &provenance)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", args.card.display()))?;
     // The card must still load; anything else is a bug here, caught before writing.
     MaterialCard::from_toml(&written, &origin)?;
     std::fs::write(&args.output, &written).with_context(|| format!("cannot write {origin}"))?;
@@ -207,6 +213,92 @@ fn run_shear(args: &ShearArgs) -> anyhow::Result<()> {
         write_png(png, &plot, 900, 600)?;
     }
     Ok(())
+}
+
+/// The terms `--terms` names (module doc of `fit::shear`), with `--friction-onset` and
+/// `--locking-angle`: each once, powers from 1, `locking` only with its angle.
+fn shear_terms(args: &ShearArgs) -> anyhow::Result<Vec<ShearTerm>> {
+    let bad = |why: String| anyhow::anyhow!("--terms {}: {why}", args.terms);
+    let tokens: Vec<&str> = args.terms.split(',').map(str::trim).collect();
+    if let [single] = tokens.as_slice() {
+        if let Ok(m) = single.parse::<u32>() {
+            if m == 0 {
+                return Err(bad("at least one term is needed".into()));
+            }
+            return Ok(crate::fit::shear::polynomial_terms(m));
+        }
+    }
+    let mut terms = Vec::new();
+    for token in tokens {
+        let term = match token {
+            "friction" => {
+                let onset = args.friction_onset;
+                if !(onset.is_finite() && onset > 0.0 && onset < 15.0) {
+                    anyhow::bail!(
+                        "--friction-onset {onset}: must be an angle between 0 and 15 degrees"
+                    );
+                }
+                ShearTerm::Friction {
+                    onset: onset.to_radians(),
+                }
+            }
+            "locking" => match args.locking_angle {
+                Some(a) if a.is_finite() && a > 0.0 && a < 90.0 => ShearTerm::Locking {
+                    angle: a.to_radians(),
+                },
+                Some(a) => anyhow::bail!("--locking-angle {a}: must lie between 0 and 90 degrees"),
+                None => anyhow::bail!(
+                    "--terms {}: the locking term needs --locking-angle (degrees), where the \
+                     yarns begin to jam",
+                    args.terms
+                ),
+            },
+            power => match power.parse::<u32>() {
+                Ok(k) if k >= 1 => ShearTerm::Power(k),
+                _ => {
+                    return Err(bad(format!(
+                        "'{power}' is not a term: friction, locking or a power 1, 2, ..."
+                    )))
+                }
+            },
+        };
+        if terms.iter().any(|t: &ShearTerm| t.name() == term.name()) {
+            return Err(bad(format!("'{token}' is named twice")));
+        }
+        terms.push(term);
+    }
+    Ok(terms)
+}
+
+/// `card` with its `[fabric]` shear law set to `law`: `shear` (the polynomial, with
+/// `provenance` above it), `shear_friction` and `shear_friction_onset`, `shear_locking` and
+/// `shear_locking_angle`, each written when the law has the term and removed when not.
+fn write_shear_law(
+    card: &str,
+    law: &ShearInteraction,
+    provenance: &[String],
+) -> Result<String, String> {
+    let mut text = replace_key(
+        card,
+        "fabric",
+        "shear",
+        &toml_array(&law.coefficients()),
+        provenance,
+    )?;
+    let mut set = |key: &str, value: Option<f64>| -> Result<(), String> {
+        text = match value {
+            Some(v) => replace_key(&text, "fabric", key, &toml_float(v), &[])?,
+            None => remove_key(&text, "fabric", key)?,
+        };
+        Ok(())
+    };
+    let friction = law.friction();
+    set("shear_friction", friction.map(|f| f.0))?;
+    set("shear_friction_onset", friction.map(|f| f.1.to_degrees()))?;
+    let locking = law.locking();
+    set("shear_locking", locking.map(|l| l.0))?;
+    set("shear_locking_angle", locking.map(|l| l.1.to_degrees()))?;
+    Ok(text)
 }
 
 /// `--refine-fe`: the FE bias-extension test in the loop, from the analytic fit, on the
@@ -235,7 +327,15 @@ fn refine(
     );
     println!(
         "{:>4}  {:>6}  {:>8}  {:>34}  {:>10}  {:>8}  {:>9}  {:>6}  {:>7}",
-        "it", "step", "", "c_k (MPa)", "RMS (N)", "% range", "per point", "KE/IE", "wall"
+        "it",
+        "step",
+        "",
+        names_of(&fit.terms),
+        "RMS (N)",
+        "% range",
+        "per point",
+        "KE/IE",
+        "wall"
     );
     let mut report = |r: &FeRun| {
         let c: Vec<String> = r.coefficients.iter().map(|c| format!("{c:.4e}")).collect();
@@ -252,13 +352,7 @@ fn refine(
             r.wall_seconds
         );
     };
-    let refined = refine_shear_fe(
-        measured,
-        card,
-        &fit.result.parameters,
-        &settings,
-        &mut report,
-    )?;
+    let refined = refine_shear_fe(measured, card, &fit.law(), &settings, &mut report)?;
     if refined.stop == Stop::NoDescent {
         eprintln!(
             "warning: no step along the analytic model's direction lowered the FE misfit; the \
@@ -267,6 +361,7 @@ fn refine(
     }
     print_coefficients(
         "refined c_k (MPa)",
+        &refined.terms,
         &refined.coefficients,
         &refined.standard_errors,
     );
@@ -450,33 +545,76 @@ fn shear_provenance(args: &ShearArgs, fit: &ShearFit, matrix: Option<&MatrixShar
         ));
     }
     lines.push(format!(
-        "Standard errors [{}] MPa; RMS misfit of F_sh {:.3e} N/mm.",
+        "Standard errors [{}] MPa (terms {}); RMS misfit of the {} {:.3e} ({:.1} % of the \
+         mean, {:.1} % of the range).",
         errors.join(", "),
-        fit.rms_force
+        args.terms,
+        fit.quantity,
+        fit.rms,
+        100.0 * fit.rms_of_mean,
+        100.0 * fit.rms_of_range
     ));
     lines
 }
 
-/// The shear coefficients with their standard errors, one row each under `header`.
-fn print_coefficients(header: &str, coefficients: &[f64], standard_errors: &[f64]) {
-    println!("{:>4}  {:>24}", "k", header);
-    for (k, (c, e)) in coefficients.iter().zip(standard_errors).enumerate() {
-        println!("{:>4}  {:>24}", k + 1, format!("{c:.4e} ± {e:.2e}"));
+/// The names of the terms' coefficients, for a table header (MPa).
+fn names_of(terms: &[ShearTerm]) -> String {
+    let names: Vec<String> = terms.iter().map(ShearTerm::name).collect();
+    format!("{} (MPa)", names.join(", "))
+}
+
+/// The shear coefficients with their standard errors, one row each (the term's name first)
+/// under `header`.
+fn print_coefficients(
+    header: &str,
+    terms: &[ShearTerm],
+    coefficients: &[f64],
+    standard_errors: &[f64],
+) {
+    println!("{:>8}  {:>24}", "term", header);
+    for ((term, c), e) in terms.iter().zip(coefficients).zip(standard_errors) {
+        println!("{:>8}  {:>24}", term.name(), format!("{c:.4e} ± {e:.2e}"));
     }
 }
 
+/// The fit's coefficients, its misfit (RMS over the mean and over the range of the data's
+/// `F_sh`), and each point's residual.
 fn print_shear_table(fit: &ShearFit, matrix: Option<&MatrixShare>) {
     print_coefficients(
         "c_k (MPa)",
+        &fit.terms,
         &fit.result.parameters,
         &fit.result.standard_errors,
     );
     println!(
-        "points: {}; RMS residual: {:.3e} N/mm ({:.3} relative)",
+        "points: {}; RMS residual of the {}: {:.3e} ({:.3} relative; {:.2} % of the mean, \
+         {:.2} % of the range)",
         fit.points.len(),
-        fit.rms_force,
-        fit.result.rms_residual
+        fit.quantity,
+        fit.rms,
+        fit.result.rms_residual,
+        100.0 * fit.rms_of_mean,
+        100.0 * fit.rms_of_range
     );
+    println!(
+        "{:>6}  {:>9}  {:>12}  {:>12}  {:>9}   ({})",
+        "line", "shear (°)", "data", "model", "residual", fit.quantity
+    );
+    for p in &fit.fitted {
+        let relative = if p.data != 0.0 {
+            format!("{:+.1} %", 100.0 * (p.model - p.data) / p.data)
+        } else {
+            "-".into()
+        };
+        println!(
+            "{:>6}  {:>9.2}  {:>12.4e}  {:>12.4e}  {:>9}",
+            p.line,
+            p.gamma.to_degrees(),
+            p.data,
+            p.model,
+            relative
+        );
+    }
     if let (Some(m), Some(last)) = (matrix, fit.points.last()) {
         let i = m.fabric.lines.iter().position(|&l| l == last.line);
         if let Some(i) = i {

@@ -73,14 +73,15 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
                 })?,
                 _ => card.fabric.as_ref(),
             };
-            let response = drive_layer(law, fibres, &history).map_err(|f| locate(&table, f, &args.card))?;
+            let response =
+                drive_layer(law, fibres, &history).map_err(|f| locate(&table, f, &args.card))?;
             (&LAYER_OUTPUT, response.iter().map(layer_row).collect())
         }
         LayerChoice::Laminate => {
             let table = read_csv_table(&args.history, &LAMINATE_COLUMNS)?;
             let history = membrane_history(&table)?;
-            let response =
-                drive_laminate(&card.laminate, fibres, &history).map_err(|f| locate(&table, f, &args.card))?;
+            let response = drive_laminate(&card.laminate, fibres, &history)
+                .map_err(|f| locate(&table, f, &args.card))?;
             (
                 &LAMINATE_OUTPUT,
                 response.iter().map(laminate_row).collect(),

@@ -49,6 +49,28 @@ pub fn replace_key(
     ))
 }
 
+/// `card` without the line(s) of `key = ...` in `[section]` (a fit that no longer uses a term
+/// drops its key); the comments around it stay. A card without the key is returned as it is.
+pub fn remove_key(card: &str, section: &str, key: &str) -> Result<String, String> {
+    let (start, end) = section_span(card, section)
+        .ok_or_else(|| format!("the card has no [{section}] section"))?;
+    let Some((line_start, value_start)) = key_position(card, start, end, key) else {
+        return Ok(card.to_string());
+    };
+    let value_end = value_end(card, value_start)
+        .ok_or_else(|| format!("[{section}] {key}: the value does not end"))?;
+    let kept_from = trailing_comment_end(card, value_end);
+    let line_end = card[kept_from..]
+        .find('\n')
+        .map_or(card.len(), |i| kept_from + i + 1);
+    let rest = if card[kept_from..line_end].trim().is_empty() {
+        line_end
+    } else {
+        kept_from
+    };
+    Ok(format!("{}{}", &card[..line_start], &card[rest..]))
+}
+
 /// Start of the provenance an earlier fit wrote above the key line at `key_line` (which is in
 /// the section body starting at `start`), or `key_line` when there is none: among the comment
 /// lines directly above the key, the nearest one starting with [`FIT_MARKER`]. Comments above
@@ -205,6 +227,21 @@ pub(super) fn header_name(line: &str) -> Option<&str> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A key's line goes, with its trailing comment; its neighbours and a key of a longer name
+    /// that starts like it stay; a missing key leaves the card as it is.
+    #[test]
+    fn a_removed_key_takes_its_line_only() {
+        let card = "[fabric]\nshear = [1.0]\nshear_friction = 0.5 # k0\nshear_friction_onset = 2.0\n[bending]\nwarp = 1.0\n";
+        let removed = remove_key(card, "fabric", "shear_friction").unwrap();
+        assert_eq!(
+            removed,
+            "[fabric]\nshear = [1.0]\nshear_friction_onset = 2.0\n[bending]\nwarp = 1.0\n"
+        );
+        assert_eq!(remove_key(card, "fabric", "shear_locking").unwrap(), card);
+        assert_eq!(remove_key(card, "bending", "shear").unwrap(), card);
+        assert!(remove_key(card, "matrix", "c10").is_err());
+    }
 
     const CARD: &str = "[layers]\nwarp_tension = 1\n\n[fabric]\n# A_k\nwarp_tension = [4.0e4,\n  2.0e6] # MPa\nweft_tension = [1.0]\nshear = [0.25] # c_k\n\n[bending]\nwarp = 1.0\n";
 

@@ -1,26 +1,31 @@
-//! Shear coefficients `c_k` of the fabric's interaction energy `W_s(I10) = sum c_k I10^k`
-//! (docs/model.md §3) from a bias-extension or picture-frame force–displacement curve
-//! (docs/model.md §5).
+//! Coefficients of the fabric's interaction energy `W_s(I10)` (docs/model.md §3: polynomial
+//! `c_k I10^k`, friction-like and locking terms, `material::fabric_shear`) from a
+//! bias-extension or picture-frame force–displacement curve (docs/model.md §5).
 //!
 //! 1. The curve is read and checked point by point (every error names the file and line).
 //! 2. Each point becomes `(gamma, F_sh)`: for a bias-extension test the pin-jointed angle of
 //!    the central zone and the normalised shear force of Cao et al. 2008, solved recursively
 //!    from small angles (docs/model.md §5, `experiment::kinematics`); for a picture frame the
 //!    frame's angle and `F_norm = F L_frame / (2 cos(theta) L_fabric^2)` (docs/model.md §5).
-//! 3. `c_1..c_m` are fitted to `F_sh(gamma) = 2 t_B sin(gamma) W_s'(sin^2 gamma)` (docs/model.md
-//!    §5, last bullet) up to a largest angle, by Levenberg–Marquardt (`least_squares`).
+//! 3. The chosen terms' coefficients are fitted, up to a largest angle, by Levenberg–Marquardt
+//!    (`least_squares`): for a picture frame to `F_sh(gamma) = 2 t_B sin(gamma) W_s'(sin^2
+//!    gamma)` (docs/model.md §5, last bullet); for a bias extension to the crosshead force of
+//!    a pin-jointed specimen of that `F_sh` (the forward form of Cao's normalisation,
+//!    [`observations`]).
+//! 4. A fitted law whose shear force falls as the shear grows somewhere over the fitted angles
+//!    (a negative shear stiffness) is refused: fewer or other terms are needed.
 //!
-//! The model is linear in `c_k`; LM is used anyway for its standard errors and checks, started
-//! from zero.
+//! The model is linear in the coefficients; LM is used anyway for its standard errors and
+//! checks, started from zero.
 
 use super::least_squares::{fit, FitError, FitResult, Residuals};
 use crate::experiment::kinematics::{
-    bias_extension_normalised_shear_force, bias_extension_shear_angle, picture_frame_angles,
-    picture_frame_normalised_force,
+    bias_extension_force, bias_extension_normalised_shear_force, bias_extension_shear_angle,
+    picture_frame_angles, picture_frame_normalised_force,
 };
 use crate::io::xy_curve::{parse_xy_curve, read_curve_text, CurveLayout};
 use crate::io::InputError;
-use crate::material::fabric::ShearInteraction;
+use crate::material::fabric::{ShearInteraction, ShearTerm};
 use nalgebra::{DMatrix, DVector};
 use std::path::Path;
 
@@ -63,17 +68,31 @@ pub struct ShearPoint {
 /// The fitted shear law.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ShearFit {
-    /// `c_1..c_m` (MPa) with their standard errors and the RMS relative residual.
+    /// The terms fitted, in the order of the parameters.
+    pub terms: Vec<ShearTerm>,
+    /// Thickness of the fabric layers `t_B` the fit assumed (mm).
+    pub thickness: f64,
+    /// Their coefficients (MPa) with their standard errors and the RMS relative residual.
     pub result: FitResult,
-    /// The points the fit used (`gamma <= max_shear`).
+    /// The data's points normalised (`gamma`, `F_sh`), those the fit used (`gamma <=
+    /// max_shear`): for plots, and the fitted quantity of a picture frame.
     pub points: Vec<ShearPoint>,
-    /// RMS of `F_model - F_data` over the fitted points (N/mm).
-    pub rms_force: f64,
+    /// What the fit matched at each of them ([`FittedPoint`]): the crosshead force (N) of a
+    /// bias extension, `F_sh` (N/mm) of a picture frame.
+    pub fitted: Vec<FittedPoint>,
+    /// The fitted quantity and its unit, for tables.
+    pub quantity: &'static str,
+    /// RMS of `model - data` over the fitted points, in the fitted quantity's unit.
+    pub rms: f64,
+    /// That RMS over the mean of the data over the fitted points.
+    pub rms_of_mean: f64,
+    /// That RMS over the range (largest minus smallest) of the data.
+    pub rms_of_range: f64,
 }
 
 impl ShearFit {
     pub fn law(&self) -> ShearInteraction {
-        ShearInteraction::new(self.result.parameters.clone())
+        ShearInteraction::of(&self.terms, &self.result.parameters)
     }
 }
 
@@ -208,70 +227,103 @@ pub fn shear_angle(test: &ShearTest, d: f64) -> f64 {
     }
 }
 
-/// `d F_sh / d c_k = 2 t sin(g) k sin^(2(k-1))(g)` at shear angle `g` (radians) for fabric
-/// layers of total thickness `t` (mm), `k` from 1: the model `F_sh = 2 t sin(g) W_s'(sin^2 g)`
-/// of docs/model.md §5 is linear in the coefficients, so `F_sh = sum_k c_k basis(t, g, k)`. The
-/// analytic fit's Jacobian here, and through Cao's forward model the surrogate Jacobian of the
-/// FE refinement (`shear_fe`).
-pub(crate) fn basis(thickness: f64, gamma: f64, k: usize) -> f64 {
-    let s = gamma.sin();
-    2.0 * thickness * s * k as f64 * (s * s).powi(k as i32 - 1)
-}
-
-/// Share of the largest normalised shear force under which a point's residual is no longer
-/// relative.
+/// Share of the largest observed force under which a point's residual is no longer relative.
 pub const RELATIVE_FLOOR: f64 = 0.05;
 
-/// Residuals `(F_model - F_data) / max(|F_data|, floor)` **(choice)**, as in `fit matrix`:
-/// load-cell noise is a share of the reading, and equal weights would let the few points near
-/// locking decide the whole curve. The floor, 5 % of the largest fitted `F_sh`, is wider than
-/// the matrix fit's 1 %: bias-extension forces at a few degrees are a few per cent of the
-/// final force, where a digitised curve's absolute error (a fraction of the plot's full scale)
-/// and the recursion's start (`F_sh` taken proportional to `gamma` below the first point)
-/// make relative errors meaningless.
-struct ShearResiduals {
+/// One observation the fit matches: the crosshead force (N) of a bias-extension point, or the
+/// normalised shear force `F_sh` (N/mm) of a picture-frame point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FittedPoint {
+    /// Line of the curve point in the file.
+    pub line: usize,
+    /// Shear angle of the point (radians).
+    pub gamma: f64,
+    pub data: f64,
+    /// The fitted law's value.
+    pub model: f64,
+}
+
+/// What the fit matches, per test **(choice)**:
+/// - bias extension: the crosshead force itself, through the analytic forward model of a
+///   pin-jointed specimen, `F(d) = bias_extension_force(W, H, gamma(d), F_sh)` (Cao et al.
+///   2008, docs/model.md §5), linear in the coefficients. Normalising the data instead (the
+///   recursion of `shear_points`) needs `F_sh` below the first point, taken proportional to
+///   `gamma`; a law with a friction-like term is not, and the fit was off by 3 % on exact data;
+/// - picture frame: `F_sh` of each point, which the frame's kinematics give exactly.
+///
+/// Each row of the returned matrix is `d observation / d coefficient` of one point.
+fn observations(
+    curve: &ForceCurve,
+    test: &ShearTest,
     thickness: f64,
-    terms: usize,
-    gamma: Vec<f64>,
-    force: Vec<f64>,
-    scale: Vec<f64>,
+    terms: &[ShearTerm],
+    points: &[ShearPoint],
+) -> (DMatrix<f64>, DVector<f64>) {
+    match *test {
+        ShearTest::BiasExtension { width, length } => {
+            let force: Vec<f64> = points
+                .iter()
+                .map(|p| {
+                    let i = curve.lines.iter().position(|&l| l == p.line).unwrap_or(0);
+                    curve.force[i]
+                })
+                .collect();
+            let basis = DMatrix::from_fn(points.len(), terms.len(), |i, j| {
+                bias_extension_force(width, length, points[i].gamma, |g| {
+                    terms[j].force_basis(thickness, g)
+                })
+            });
+            (basis, DVector::from_vec(force))
+        }
+        ShearTest::PictureFrame { .. } => (
+            DMatrix::from_fn(points.len(), terms.len(), |i, j| {
+                terms[j].force_basis(thickness, points[i].gamma)
+            }),
+            DVector::from_iterator(points.len(), points.iter().map(|p| p.force)),
+        ),
+    }
+}
+
+/// Residuals `(model - data) / max(|data|, floor)` **(choice)**, as in `fit matrix`: load-cell
+/// noise is a share of the reading, and equal weights would let the few points near locking
+/// decide the whole curve. The floor, 5 % of the largest observation, is wider than the matrix
+/// fit's 1 %: bias-extension forces at a few degrees are a few per cent of the final force,
+/// where a digitised curve's absolute error (a fraction of the plot's full scale) makes relative
+/// errors meaningless. The model is linear, `basis * coefficients`.
+struct ShearResiduals {
+    basis: DMatrix<f64>,
+    data: DVector<f64>,
+    scale: DVector<f64>,
 }
 
 impl ShearResiduals {
-    fn new(thickness: f64, terms: usize, points: &[ShearPoint]) -> Self {
-        let largest = points.iter().map(|p| p.force.abs()).fold(0.0, f64::max);
+    fn new(basis: DMatrix<f64>, data: DVector<f64>) -> Self {
+        let largest = data.iter().map(|d| d.abs()).fold(0.0, f64::max);
         let floor = (RELATIVE_FLOOR * largest).max(f64::MIN_POSITIVE);
-        Self {
-            thickness,
-            terms,
-            gamma: points.iter().map(|p| p.gamma).collect(),
-            force: points.iter().map(|p| p.force).collect(),
-            scale: points.iter().map(|p| p.force.abs().max(floor)).collect(),
-        }
+        let scale = data.map(|d| d.abs().max(floor));
+        Self { basis, data, scale }
     }
 
-    fn model(&self, c: &[f64], gamma: f64) -> f64 {
-        (1..=self.terms)
-            .map(|k| c[k - 1] * basis(self.thickness, gamma, k))
-            .sum()
+    fn model(&self, c: &[f64]) -> DVector<f64> {
+        &self.basis * DVector::from_column_slice(c)
     }
 }
 
 impl Residuals for ShearResiduals {
     fn observations(&self) -> usize {
-        self.gamma.len()
+        self.data.len()
     }
 
     fn residuals(&self, c: &DVector<f64>) -> DVector<f64> {
-        DVector::from_fn(self.gamma.len(), |i, _| {
-            (self.model(c.as_slice(), self.gamma[i]) - self.force[i]) / self.scale[i]
-        })
+        (self.model(c.as_slice()) - &self.data).component_div(&self.scale)
     }
 
     fn jacobian(&self, _: &DVector<f64>) -> DMatrix<f64> {
-        DMatrix::from_fn(self.gamma.len(), self.terms, |i, j| {
-            basis(self.thickness, self.gamma[i], j + 1) / self.scale[i]
-        })
+        let mut j = self.basis.clone();
+        for (mut row, s) in j.row_iter_mut().zip(self.scale.iter()) {
+            row /= *s;
+        }
+        j
     }
 }
 
@@ -288,15 +340,45 @@ pub enum ShearFitError {
         max_shear_deg: f64,
         source: FitError,
     },
+    #[error(
+        "{origin}: the fitted law ({law}) gives a shear force that falls as the shear grows at \
+         {angle_deg}°, inside the fitted range (up to {max_shear_deg}°): a negative shear \
+         stiffness; fit fewer or other terms (--terms), e.g. friction,1,2"
+    )]
+    Softening {
+        origin: String,
+        law: String,
+        angle_deg: u32,
+        max_shear_deg: f64,
+    },
+    #[error(
+        "{origin}: the fitted {term} coefficient is {value:.4e} MPa, negative: the data do not \
+         show that term (a {term} term resists shear, it cannot push it on); leave it out of \
+         --terms"
+    )]
+    NegativeTerm {
+        origin: String,
+        term: String,
+        value: f64,
+    },
 }
 
-/// Fits `terms` coefficients `c_1..c_m` to the points of `curve` up to `max_shear` (radians),
-/// for a fabric layer of thickness `thickness` (mm).
+/// `name = value` of each term, for messages.
+pub fn describe_law(law: &ShearInteraction) -> String {
+    law.terms()
+        .iter()
+        .map(|(term, value)| format!("{} = {value:.4e}", term.name()))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// Fits the coefficients of `terms` to the points of `curve` up to `max_shear` (radians), for a
+/// fabric layer of thickness `thickness` (mm).
 pub fn fit_shear(
     curve: &ForceCurve,
     test: &ShearTest,
     thickness: f64,
-    terms: usize,
+    terms: &[ShearTerm],
     max_shear: f64,
 ) -> Result<ShearFit, ShearFitError> {
     let points: Vec<ShearPoint> = shear_points(curve, test)?
@@ -306,29 +388,82 @@ pub fn fit_shear(
     let fail = |source: FitError, n: usize| ShearFitError::Fit {
         origin: curve.origin.clone(),
         points: n,
-        terms,
+        terms: terms.len(),
         max_shear_deg: max_shear.to_degrees(),
         source,
     };
-    if terms == 0 {
+    if terms.is_empty() {
         return Err(fail(
             FitError::NotConverged {
-                reason: "--terms must be at least 1".into(),
+                reason: "--terms must name at least one term".into(),
             },
             points.len(),
         ));
     }
-    let problem = ShearResiduals::new(thickness, terms, &points);
-    let result = fit(&problem, &vec![0.0; terms]).map_err(|e| fail(e, points.len()))?;
-    let ssr: f64 = points
+    let (basis, data) = observations(curve, test, thickness, terms, &points);
+    let problem = ShearResiduals::new(basis, data);
+    let result = fit(&problem, &vec![0.0; terms.len()]).map_err(|e| fail(e, points.len()))?;
+    let law = ShearInteraction::of(terms, &result.parameters);
+    let max_shear_deg = max_shear.to_degrees();
+    if let Some((term, value)) = law.first_negative_constrained() {
+        return Err(ShearFitError::NegativeTerm {
+            origin: curve.origin.clone(),
+            term: term.name(),
+            value,
+        });
+    }
+    if let Some(angle_deg) = law.first_softening_degree(max_shear_deg.floor() as u32) {
+        return Err(ShearFitError::Softening {
+            origin: curve.origin.clone(),
+            law: describe_law(&law),
+            angle_deg,
+            max_shear_deg,
+        });
+    }
+    let model = problem.model(&result.parameters);
+    let fitted: Vec<FittedPoint> = points
         .iter()
-        .map(|p| (problem.model(&result.parameters, p.gamma) - p.force).powi(2))
-        .sum();
+        .zip(model.iter().zip(problem.data.iter()))
+        .map(|(p, (&model, &data))| FittedPoint {
+            line: p.line,
+            gamma: p.gamma,
+            data,
+            model,
+        })
+        .collect();
+    let n = fitted.len() as f64;
+    let rms = (fitted
+        .iter()
+        .map(|p| (p.model - p.data).powi(2))
+        .sum::<f64>()
+        / n)
+        .sqrt();
+    let mean = fitted.iter().map(|p| p.data).sum::<f64>() / n;
+    let (lo, hi) = fitted
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+            (lo.min(p.data), hi.max(p.data))
+        });
+    let quantity = match test {
+        ShearTest::BiasExtension { .. } => "crosshead force (N)",
+        ShearTest::PictureFrame { .. } => "normalised shear force F_sh (N/mm)",
+    };
     Ok(ShearFit {
-        rms_force: (ssr / points.len() as f64).sqrt(),
+        terms: terms.to_vec(),
+        thickness,
+        quantity,
+        rms,
+        rms_of_mean: rms / mean.abs().max(f64::MIN_POSITIVE),
+        rms_of_range: rms / (hi - lo).max(f64::MIN_POSITIVE),
+        fitted,
         result,
         points,
     })
+}
+
+/// The polynomial terms `c_1..c_m`.
+pub fn polynomial_terms(m: u32) -> Vec<ShearTerm> {
+    (1..=m).map(ShearTerm::Power).collect()
 }
 
 #[cfg(test)]
@@ -369,7 +504,7 @@ mod tests {
             width: 150.0,
             length: 250.0,
         };
-        let e = fit_shear(&curve, &short, 1.0, 3, 1.0)
+        let e = fit_shear(&curve, &short, 1.0, &polynomial_terms(3), 1.0)
             .unwrap_err()
             .to_string();
         assert!(e.starts_with("b.csv: length/width = 1.667"), "{e}");
@@ -377,7 +512,7 @@ mod tests {
             width: 150.0,
             length: 450.0,
         };
-        let e = fit_shear(&curve, &test, 1.0, 3, 1.0)
+        let e = fit_shear(&curve, &test, 1.0, &polynomial_terms(3), 1.0)
             .unwrap_err()
             .to_string();
         assert!(
@@ -385,7 +520,9 @@ mod tests {
             "{e}"
         );
         let far = parse_force_curve("displacement_mm,force_N\n1,1\n200,2\n", "b.csv").unwrap();
-        let e = fit_shear(&far, &test, 1.0, 1, 1.0).unwrap_err().to_string();
+        let e = fit_shear(&far, &test, 1.0, &polynomial_terms(1), 1.0)
+            .unwrap_err()
+            .to_string();
         assert!(
             e.starts_with("b.csv: line 3: displacement_mm = 200 is past"),
             "{e}"
@@ -412,7 +549,7 @@ mod tests {
             width: w,
             length: h,
         };
-        let fitted = fit_shear(&curve, &test, t, 3, 50f64.to_radians()).unwrap();
+        let fitted = fit_shear(&curve, &test, t, &polynomial_terms(3), 50f64.to_radians()).unwrap();
         let law = fitted.law();
         for g in [10.0, 20.0, 30.0, 40.0, 50.0] {
             let g = f64::to_radians(g);

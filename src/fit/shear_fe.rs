@@ -1,4 +1,5 @@
-//! Refinement of the shear coefficients `c_k` of `W_s(I10) = sum c_k I10^k` (docs/model.md §3) by
+//! Refinement of the shear coefficients `c` of `W_s(I10)` (docs/model.md §3: the polynomial,
+//! friction-like and locking terms chosen, `material::fabric_shear`) by
 //! the FE bias-extension test itself (issue 5, "refine by running the FE simulation inside the
 //! fit loop").
 //!
@@ -28,14 +29,14 @@
 //! tenfold per iteration (`tests/fit_shear_fe.rs`).
 
 use super::least_squares::MAX_CONDITION;
-use super::shear::{basis, ForceCurve, RELATIVE_FLOOR};
+use super::shear::{ForceCurve, RELATIVE_FLOOR};
 use crate::experiment::bias_extension::BiasExtension;
 use crate::experiment::kinematics::{
     bias_extension_displacement, bias_extension_force, bias_extension_shear_angle,
 };
 use crate::experiment::sheet_test::{SheetTest, TestProcess};
 use crate::material::card::SHEAR_CHECK_LIMIT_DEG;
-use crate::material::fabric::ShearInteraction;
+use crate::material::fabric::{ShearInteraction, ShearTerm};
 use crate::material::{Laminate, Layer, MaterialCard, MaterialLaw, WovenFabric};
 use crate::mesh::DiagonalPattern;
 use crate::solver::SolverKind;
@@ -279,7 +280,9 @@ pub struct FePoint {
 /// The refined shear law.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ShearFeFit {
-    /// `c_1..c_m` (MPa).
+    /// The terms refined, in the order of the coefficients.
+    pub terms: Vec<ShearTerm>,
+    /// Their coefficients (MPa).
     pub coefficients: Vec<f64>,
     /// `sqrt(diag(s^2 (J^T J)^-1))`, `J` the weighted surrogate Jacobian and
     /// `s^2 = SSR / (n - m)` of the final weighted FE residuals.
@@ -295,7 +298,7 @@ pub struct ShearFeFit {
 
 impl ShearFeFit {
     pub fn law(&self) -> ShearInteraction {
-        ShearInteraction::new(self.coefficients.clone())
+        ShearInteraction::of(&self.terms, &self.coefficients)
     }
 
     /// The accepted run of the final coefficients.
@@ -355,39 +358,48 @@ pub enum ShearFeError {
 }
 
 /// The analytic forward model: the bias-extension force (N) at crosshead displacement `d` of a
-/// pin-jointed specimen whose fabric layers (total thickness `thickness`) follow `c`, by the
+/// pin-jointed specimen whose fabric layers (total thickness `thickness`) follow `law`, by the
 /// energy balance of Cao et al. 2008 (docs/model.md §5).
-pub fn analytic_force(width: f64, length: f64, thickness: f64, c: &[f64], d: f64) -> f64 {
-    let law = ShearInteraction::new(c.to_vec());
+pub fn analytic_force(
+    width: f64,
+    length: f64,
+    thickness: f64,
+    law: &ShearInteraction,
+    d: f64,
+) -> f64 {
     let gamma = bias_extension_shear_angle(width, length, d);
     bias_extension_force(width, length, gamma, |g| {
         law.normalised_shear_force(thickness, g)
     })
 }
 
-/// `dF_an(d_i)/dc_k` (N/MPa), `displacement.len() x terms`: the forward model with `F_sh`
-/// replaced by the k-th basis function (`shear::basis`), exact as the model is linear in `c`.
+/// `dF_an(d_i)/dc_k` (N/MPa), `displacement.len() x terms.len()`: the forward model with `F_sh`
+/// replaced by the k-th term's force (`ShearTerm::force_basis`), exact as the model is linear
+/// in `c`.
 pub fn surrogate_jacobian(
     width: f64,
     length: f64,
     thickness: f64,
     displacement: &[f64],
-    terms: usize,
+    terms: &[ShearTerm],
 ) -> DMatrix<f64> {
-    DMatrix::from_fn(displacement.len(), terms, |i, j| {
+    DMatrix::from_fn(displacement.len(), terms.len(), |i, j| {
         let gamma = bias_extension_shear_angle(width, length, displacement[i]);
-        bias_extension_force(width, length, gamma, |g| basis(thickness, g, j + 1))
+        bias_extension_force(width, length, gamma, |g| terms[j].force_basis(thickness, g))
     })
 }
 
-/// The laminate of `card` with every fabric layer's shear law set to `c` (yarns unchanged);
+/// The laminate of `card` with every fabric layer's shear law set to `law` (yarns unchanged);
 /// matrix layers keep their law, and layers that shared a law still share one.
-pub fn laminate_with_shear(card: &MaterialCard, c: &[f64]) -> Result<Laminate, ShearFeError> {
+pub fn laminate_with_shear(
+    card: &MaterialCard,
+    law: &ShearInteraction,
+) -> Result<Laminate, ShearFeError> {
     let card_fabric: Arc<dyn MaterialLaw> = card.fabric.clone();
     let fabric: Arc<dyn MaterialLaw> = Arc::new(WovenFabric::new(
         card.fabric.warp.clone(),
         card.fabric.weft.clone(),
-        ShearInteraction::new(c.to_vec()),
+        law.clone(),
     ));
     let layers = card
         .laminate
@@ -425,10 +437,9 @@ fn fabric_thickness(card: &MaterialCard) -> Result<f64, ShearFeError> {
     }
 }
 
-/// The first angle (whole degrees up to the card's check limit) where `c` gives a decreasing
+/// The first angle (whole degrees up to the card's check limit) where `law` gives a decreasing
 /// shear energy, `W_s'(sin^2 g) < 0`, if any.
-fn negative_stiffness_angle(c: &[f64]) -> Option<u32> {
-    let law = ShearInteraction::new(c.to_vec());
+fn negative_stiffness_angle(law: &ShearInteraction) -> Option<u32> {
     (0..=SHEAR_CHECK_LIMIT_DEG)
         .find(|&deg| law.derivative(f64::from(deg).to_radians().sin().powi(2)) < 0.0)
 }
@@ -575,6 +586,7 @@ struct Evaluation {
 /// Everything an FE evaluation needs, fixed over the iteration.
 struct Problem<'a> {
     card: &'a MaterialCard,
+    terms: Vec<ShearTerm>,
     test: BiasExtension,
     data: DataPoints,
     max_kinetic_ratio: f64,
@@ -594,7 +606,8 @@ impl Problem<'_> {
             coefficients: coefficients.clone(),
             message,
         };
-        let laminate = laminate_with_shear(self.card, &coefficients)?;
+        let law = ShearInteraction::of(&self.terms, &coefficients);
+        let laminate = laminate_with_shear(self.card, &law)?;
         let start = Instant::now();
         let run = self
             .test
@@ -657,18 +670,20 @@ impl Problem<'_> {
     }
 }
 
-/// Refines the shear coefficients `start` (from the analytic fit, `fit_shear`) so that the FE
-/// bias-extension test of `card` with them matches the measured `curve` up to
-/// `settings.max_shear` (module doc). `report` sees every FE run as it finishes.
+/// Refines the coefficients of the law `start` (from the analytic fit, `fit_shear`), its terms
+/// kept, so that the FE bias-extension test of `card` with them matches the measured `curve` up
+/// to `settings.max_shear` (module doc). `report` sees every FE run as it finishes.
 pub fn refine_shear_fe(
     curve: &ForceCurve,
     card: &MaterialCard,
-    start: &[f64],
+    start: &ShearInteraction,
     settings: &RefineSettings,
     report: &mut dyn FnMut(&FeRun),
 ) -> Result<ShearFeFit, ShearFeError> {
     settings.validate().map_err(ShearFeError::Settings)?;
     check_start(start)?;
+    let terms = start.shapes();
+    let start = &start.values();
     let data = DataPoints::new(curve, settings);
     if data.len() <= start.len() {
         return Err(ShearFeError::TooFewPoints {
@@ -688,13 +703,14 @@ pub fn refine_shear_fe(
         settings.length,
         thickness,
         &data.displacement,
-        start.len(),
+        &terms,
     );
     // a singular surrogate is found before any FE run
     let surrogate = Surrogate::new(jacobian, &data)?;
     let end = settings.end_displacement(data.displacement[data.len() - 1]);
     let problem = Problem {
         card,
+        terms,
         test: settings.bias_extension(card, end)?,
         data,
         max_kinetic_ratio: settings.fe.max_kinetic_ratio,
@@ -706,16 +722,18 @@ pub fn refine_shear_fe(
     iterate(&problem, &surrogate, start, settings, &mut log)
 }
 
-/// The starting coefficients: finite, at least one, and a non-negative shear stiffness.
-fn check_start(start: &[f64]) -> Result<(), ShearFeError> {
-    if start.is_empty() || start.iter().any(|c| !c.is_finite()) {
+/// The starting law: at least one term, finite coefficients, and a non-negative shear
+/// stiffness.
+fn check_start(start: &ShearInteraction) -> Result<(), ShearFeError> {
+    let values = start.values();
+    if values.is_empty() || values.iter().any(|c| !c.is_finite()) {
         return Err(ShearFeError::Settings(format!(
-            "starting coefficients {start:?}: at least one, all finite numbers"
+            "starting coefficients {values:?}: at least one, all finite numbers"
         )));
     }
     match negative_stiffness_angle(start) {
         Some(angle_deg) => Err(ShearFeError::UnstableLaw {
-            coefficients: start.to_vec(),
+            coefficients: values,
             angle_deg,
         }),
         None => Ok(()),
@@ -797,7 +815,8 @@ fn line_search(
     let mut fraction = 1.0;
     for _ in 0..=settings.max_halvings {
         let trial_c = c + step * fraction;
-        if negative_stiffness_angle(trial_c.as_slice()).is_none() {
+        let law = ShearInteraction::of(&problem.terms, trial_c.as_slice());
+        if negative_stiffness_angle(&law).is_none() && law.sign_constraints_hold() {
             let mut trial = problem.evaluate(&trial_c, iteration, fraction)?;
             trial.run.accepted = trial.run.relative_rms < current.run.relative_rms;
             log.record(&trial.run);
@@ -824,6 +843,7 @@ fn finish(
     let dof = (data.len() - best.run.coefficients.len()).max(1) as f64;
     let variance = best.residuals.norm_squared() / dof;
     ShearFeFit {
+        terms: problem.terms.clone(),
         standard_errors: surrogate.standard_errors(variance),
         coefficients: best.run.coefficients.clone(),
         runs: std::mem::take(&mut log.runs),

@@ -2,7 +2,8 @@
 //! checked into ready-to-use laws. Unknown keys and out-of-range values are errors that name
 //! the file and the key.
 
-use super::fabric::{ShearInteraction, YarnTension};
+use super::fabric::{ShearInteraction, ShearTerm, YarnTension};
+use super::fabric_shear::DEFAULT_FRICTION_ONSET_DEG;
 use super::{Laminate, Layer, MaterialLaw, TemperatureTable, ViscoHyperelasticMatrix, WovenFabric};
 use crate::element::BendingRigidity;
 use crate::io::from_toml_text;
@@ -88,7 +89,16 @@ struct FabricSection {
     weft_tension: Vec<f64>,
     #[serde(default = "default_compression_fraction")]
     compression_fraction: f64,
+    /// Polynomial `c_1, c_2, ...` of `W_s` (MPa); may be empty with another shear term.
+    #[serde(default)]
     shear: Vec<f64>,
+    /// Friction-like term `k_0` (MPa, docs/model.md §3).
+    shear_friction: Option<f64>,
+    /// Its onset angle (degrees): `eps = sin(onset)`.
+    shear_friction_onset: Option<f64>,
+    /// Locking term `k_l` (MPa) and its angle (degrees).
+    shear_locking: Option<f64>,
+    shear_locking_angle: Option<f64>,
 }
 
 /// docs/model.md §3: yarn compression stiffness defaults to 1e-3 of the initial tensile one.
@@ -275,13 +285,9 @@ impl FabricSection {
                 "[fabric] compression_fraction = {f}: must lie in [0, 1]"
             ));
         }
+        let shear = self.shear_law()?;
         let warp = yarn("[fabric] warp_tension", self.warp_tension, f)?;
         let weft = yarn("[fabric] weft_tension", self.weft_tension, f)?;
-        all_finite("[fabric] shear", &self.shear)?;
-        if self.shear.is_empty() {
-            return Err("[fabric] shear needs at least one coefficient c1".into());
-        }
-        let shear = ShearInteraction::new(self.shear);
         // A falling shear energy would be a negative shear stiffness: unstable in any solver.
         for deg in (0..=SHEAR_CHECK_LIMIT_DEG).map(f64::from) {
             let i10 = deg.to_radians().sin().powi(2);
@@ -293,6 +299,73 @@ impl FabricSection {
             }
         }
         Ok(WovenFabric::new(warp, weft, shear))
+    }
+}
+
+impl FabricSection {
+    /// `W_s` from `shear`, `shear_friction` (and its onset) and `shear_locking` (and its angle),
+    /// docs/model.md §3: at least one term; coefficients finite, the friction and locking ones
+    /// non-negative; angles inside their ranges.
+    fn shear_law(&self) -> Result<ShearInteraction, String> {
+        all_finite("[fabric] shear", &self.shear)?;
+        let mut terms: Vec<(ShearTerm, f64)> =
+            ShearInteraction::new(self.shear.clone()).terms().to_vec();
+        let non_negative = |key: &str, v: f64| {
+            if v.is_finite() && v >= 0.0 {
+                Ok(v)
+            } else {
+                Err(format!("[fabric] {key} = {v}: must be a number >= 0 (MPa)"))
+            }
+        };
+        let angle = |key: &str, v: f64, (lo, hi): (f64, f64)| {
+            if v.is_finite() && v > lo && v < hi {
+                Ok(v.to_radians())
+            } else {
+                Err(format!(
+                    "[fabric] {key} = {v}: must be an angle between {lo} and {hi} degrees"
+                ))
+            }
+        };
+        match (self.shear_friction, self.shear_friction_onset) {
+            (Some(k0), onset) => {
+                let onset = onset.unwrap_or(DEFAULT_FRICTION_ONSET_DEG);
+                terms.push((
+                    ShearTerm::Friction {
+                        onset: angle("shear_friction_onset", onset, (0.0, 15.0))?,
+                    },
+                    non_negative("shear_friction", k0)?,
+                ));
+            }
+            (None, Some(_)) => {
+                return Err("[fabric] shear_friction_onset is given without shear_friction".into())
+            }
+            (None, None) => {}
+        }
+        match (self.shear_locking, self.shear_locking_angle) {
+            (Some(kl), Some(a)) => terms.push((
+                ShearTerm::Locking {
+                    angle: angle("shear_locking_angle", a, (0.0, 90.0))?,
+                },
+                non_negative("shear_locking", kl)?,
+            )),
+            (Some(_), None) => {
+                return Err(
+                    "[fabric] shear_locking needs shear_locking_angle (degrees), where it begins"
+                        .into(),
+                )
+            }
+            (None, Some(_)) => {
+                return Err("[fabric] shear_locking_angle is given without shear_locking".into())
+            }
+            (None, None) => {}
+        }
+        if terms.is_empty() {
+            return Err(
+                "[fabric] shear needs at least one term: coefficients c1, c2, ... or shear_friction"
+                    .into(),
+            );
+        }
+        Ok(ShearInteraction::from_terms(terms))
     }
 }
 
@@ -410,6 +483,67 @@ shear = [0.25, 0.0, 2.0]
             let e = error_of(&VALID.replace(from, to));
             assert!(e.contains(expected), "{to}: {e}");
         }
+    }
+
+    /// The friction-like and locking terms of `W_s`: read with their angles, the onset's
+    /// default 1°, and refused when half given, negative or out of range, naming the key.
+    #[test]
+    fn shear_friction_and_locking_terms_are_read_and_checked() {
+        let with = VALID.replace(
+            "shear = [0.25, 0.0, 2.0]",
+            "shear = [0.25]\nshear_friction = 0.05\nshear_locking = 3.0\nshear_locking_angle = 45.0",
+        );
+        let card = MaterialCard::from_toml(&with, "card.toml").unwrap();
+        let shear = &card.fabric.shear;
+        assert_eq!(shear.coefficients(), vec![0.25]);
+        assert_eq!(shear.friction(), Some((0.05, 1f64.to_radians())));
+        assert_eq!(shear.locking(), Some((3.0, 45f64.to_radians())));
+        let friction_only = VALID.replace(
+            "shear = [0.25, 0.0, 2.0]",
+            "shear_friction = 0.05\nshear_friction_onset = 2.0",
+        );
+        let card = MaterialCard::from_toml(&friction_only, "card.toml").unwrap();
+        assert_eq!(
+            card.fabric.shear.friction(),
+            Some((0.05, 2f64.to_radians()))
+        );
+        let cases = [
+            (
+                "shear_friction = 0.05",
+                "shear_friction = -0.05",
+                "shear_friction = -0.05",
+            ),
+            (
+                "shear_locking_angle = 45.0",
+                "shear_locking_angle = 95.0",
+                "shear_locking_angle = 95",
+            ),
+            (
+                "shear_locking_angle = 45.0",
+                "",
+                "needs shear_locking_angle",
+            ),
+            (
+                "shear_friction = 0.05",
+                "shear_friction_onset = 1.0",
+                "without shear_friction",
+            ),
+            (
+                "shear_friction = 0.05",
+                "shear_friction_onset = 20.0\nshear_friction = 0.05",
+                "shear_friction_onset = 20",
+            ),
+        ];
+        for (from, to, expected) in cases {
+            let e = error_of(&with.replace(from, to));
+            assert!(e.contains(expected), "{to}: {e}");
+        }
+        let none = VALID.replace("shear = [0.25, 0.0, 2.0]", "shear = []");
+        assert!(
+            error_of(&none).contains("at least one term"),
+            "{}",
+            error_of(&none)
+        );
     }
 
     #[test]

@@ -6,10 +6,12 @@
 //!   in compression `W_t = (f A_2 / 2) (sqrt(I) - 1)^2`, a fraction `f` of the initial tensile
 //!   stiffness `A_2`, so that yarns buckle instead of carrying compression; the change of slope
 //!   spread over `0 < sqrt(I) - 1 < SLACK_BAND`;
-//! - in-plane shear `W_s(I10) = sum_k c_k I10^k`, `k = 1..m`, `I10 = I8^2 / (I4 I6) = sin^2(gamma)`.
+//! - in-plane shear `W_s(I10)`, `I10 = I8^2 / (I4 I6) = sin^2(gamma)`: polynomial, friction-like
+//!   and locking terms (`fabric_shear`).
 //!
 //! State variables: none (hyperelastic). The fibre directions come with each point.
 
+pub use super::fabric_shear::{ShearInteraction, ShearTerm};
 use super::{
     ensure_finite, FibreDirections, MaterialError, MaterialLaw, PointKinematics, ThicknessRule,
 };
@@ -166,58 +168,6 @@ impl YarnTension {
     }
 }
 
-/// Fibre–fibre–matrix interaction energy `W_s(I10) = sum_k c_k I10^k`.
-#[derive(Clone, Debug, PartialEq)]
-pub struct ShearInteraction {
-    /// `c_1, c_2, ...` in MPa.
-    coefficients: Vec<f64>,
-}
-
-impl ShearInteraction {
-    pub fn new(coefficients: Vec<f64>) -> Self {
-        Self { coefficients }
-    }
-
-    /// `c_1, c_2, ...` (MPa).
-    pub fn coefficients(&self) -> &[f64] {
-        &self.coefficients
-    }
-
-    pub fn energy(&self, i10: f64) -> f64 {
-        self.coefficients
-            .iter()
-            .enumerate()
-            .map(|(i, c)| c * i10.powi(i as i32 + 1))
-            .sum()
-    }
-
-    /// `W_s'(I10) = sum_k k c_k I10^(k-1)`.
-    pub fn derivative(&self, i10: f64) -> f64 {
-        self.coefficients
-            .iter()
-            .enumerate()
-            .map(|(i, c)| (i + 1) as f64 * c * i10.powi(i as i32))
-            .sum()
-    }
-
-    /// `W_s''(I10)`.
-    pub fn second_derivative(&self, i10: f64) -> f64 {
-        self.coefficients
-            .iter()
-            .enumerate()
-            .skip(1)
-            .map(|(i, c)| ((i + 1) * i) as f64 * c * i10.powi(i as i32 - 1))
-            .sum()
-    }
-
-    /// Normalised shear force of a pure-shear (trellis) deformation of a layer of thickness
-    /// `thickness`, docs/model.md §5: `F_sh = 2 t sin(gamma) W_s'(sin^2 gamma)` (N/mm).
-    pub fn normalised_shear_force(&self, thickness: f64, gamma: f64) -> f64 {
-        let s = gamma.sin();
-        2.0 * thickness * s * self.derivative(s * s)
-    }
-}
-
 #[derive(Clone, Debug, PartialEq)]
 pub struct WovenFabric {
     pub warp: YarnTension,
@@ -366,8 +316,8 @@ impl MaterialLaw for WovenFabric {
         Ok(true)
     }
 
-    /// Both yarn families plus the shear stiffness `4 (|W_s'| + |W_s''|)` (a bound on the second
-    /// derivative of `W_s(sin^2 gamma)` in gamma). The yarn moduli add rather than take the
+    /// Both yarn families plus a bound on the shear stiffness
+    /// ([`ShearInteraction::wave_stiffness`]). The yarn moduli add rather than take the
     /// larger: both families load the same nodes of a triangle, and with the larger alone the
     /// step exceeds the critical step of skewed triangles (checked against element eigenvalues
     /// in `tests/solver_patch.rs`) and a bias-extension run of stiff yarns blows up.
@@ -375,8 +325,7 @@ impl MaterialLaw for WovenFabric {
         let inv = FibreInvariants::of(&point.c, &point.fibres)?;
         let yarns = self.warp.wave_modulus(inv.i4.sqrt()) + self.weft.wave_modulus(inv.i6.sqrt());
         let i10 = inv.i10();
-        Ok(yarns
-            + 4.0 * (self.shear.derivative(i10).abs() + self.shear.second_derivative(i10).abs()))
+        Ok(yarns + self.shear.wave_stiffness(i10))
     }
 
     /// Rate-independent: the same law.

@@ -7,6 +7,7 @@
 
 pub mod card;
 pub mod fabric;
+pub mod fabric_shear;
 pub mod laminate;
 pub mod matrix;
 pub mod stress_free_stretch;

@@ -323,3 +323,31 @@ pub fn form(
     let result = thermostamp::forming::run::run(&forming, None, None);
     (forming, result)
 }
+
+/// `thermostamp test bias-extension` as a user runs it on the implicit solver: a `width x
+/// length` specimen at `temperature`, the test's default mesh (ten cells across the width)
+/// divided by `refinement`, the physical 20 mm/min, pulled to the pin-jointed `end_deg`, with
+/// `records` rows.
+pub fn implicit_bias_test(
+    (width, length): (f64, f64),
+    temperature: f64,
+    refinement: f64,
+    end_deg: f64,
+    records: usize,
+) -> thermostamp::experiment::bias_extension::BiasExtension {
+    let mut test = thermostamp::experiment::bias_extension::BiasExtension::benchmark(temperature);
+    test.width = width;
+    test.length = length;
+    test.process.element_size = test.default_element_size() / refinement;
+    test.process.solver = thermostamp::solver::SolverKind::Implicit;
+    test.process.time_scaling = 1.0;
+    test.process.target_time_step = None;
+    test.process.end_displacement =
+        thermostamp::experiment::kinematics::bias_extension_displacement(
+            width,
+            length,
+            end_deg.to_radians(),
+        );
+    test.process.history_points = records;
+    test
+}
