@@ -23,3 +23,4 @@ pub mod io;
 pub mod material;
 pub mod mesh;
 pub mod solver;
+pub mod study;

@@ -213,7 +213,7 @@ fn compressed_strip_buckles_at_the_euler_load() {
 
 fn strip_buckles_at_the_euler_load(pattern: DiagonalPattern) {
     let card = MaterialCard::load(&common::repo_path("tests/data/bending-strip.toml")).unwrap();
-    let rigidity = card.bending.unwrap();
+    let rigidity = card.bending.unwrap().at(20.0).unwrap();
     let (length, width, shortening) = (100.0, 10.0, 1.0);
     for (warp, b) in [(Vector3::x(), rigidity.warp), (Vector3::y(), rigidity.weft)] {
         // 12 periods of the first bending mode, omega_1 = (pi/L)^2 sqrt(B / (rho t))

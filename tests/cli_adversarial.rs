@@ -233,7 +233,7 @@ fn material_point_cases(f: &Fixtures) -> Vec<Case> {
         point(&garbage, "laminate", &history),
         std::slice::from_ref(&garbage),
     );
-    let cards: [(&str, &str, &str, &str); 9] = [
+    let cards: [(&str, &str, &str, &str); 10] = [
         (
             "unknown key",
             "density = 1.56e-9",
@@ -282,7 +282,18 @@ fn material_point_cases(f: &Fixtures) -> Vec<Case> {
             "shear = \"stiff\"",
             "shear",
         ),
-        ("bending negative", "warp = 1.0", "warp = -1.0", "warp"),
+        (
+            "bending negative",
+            "warp = [1.58, 1.0, 0.66]",
+            "warp = [1.58, -1.0, 0.66]",
+            "warp",
+        ),
+        (
+            "bending table short",
+            "weft = [1.58, 1.0, 0.66]",
+            "weft = [1.58, 1.0]",
+            "weft",
+        ),
     ];
     for (name, from, to, key) in cards {
         let card = f.card(&format!("card-{}", name.replace(' ', "-")), from, to);

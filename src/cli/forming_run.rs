@@ -7,7 +7,7 @@ use super::shared::{
 };
 use crate::experiment::sheet_test::{FrameOutput, HistorySink, LiveOutput};
 use crate::forming::export::{write_formed_blank, FORMED_INP, FORMED_VTU};
-use crate::forming::run::shear_angles;
+use crate::forming::run::{shear_angles, RESULT_COLUMNS, RESULT_CSV};
 use crate::forming::{run::FormingRun, FormingModel, FormingRecord, Scenario};
 use crate::io::output_folder::ProductFiles;
 use crate::io::plot::{write_map_png, write_png, LinePlot, LineStyle, MapPlot, Series};
@@ -15,6 +15,7 @@ use crate::io::vtk::PvdSeries;
 use crate::io::CsvStream;
 use crate::solver::estimate::format_bytes;
 use crate::solver::SolverKind;
+use anyhow::Context;
 use std::path::{Path, PathBuf};
 
 #[derive(clap::Args, Debug)]
@@ -69,7 +70,11 @@ fn forming(args: &Args) -> anyhow::Result<()> {
     if result.records.is_empty() {
         return result.outcome.map(|_| ()).map_err(anyhow::Error::from);
     }
-    let mut files = vec![csv, write_force_plot(&dir, &result.records)?];
+    let mut files = vec![
+        csv,
+        write_force_plot(&dir, &result.records)?,
+        write_result_row(&dir, &scenario, &forming, &result)?,
+    ];
     if let Ok(state) = &result.outcome {
         files.push(write_shear_map(
             &dir,
@@ -133,15 +138,18 @@ fn row(r: &FormingRecord) -> [f64; 18] {
 
 /// The files a run writes, by which a later run into the folder finds and clears them.
 const CSV: &str = "forming.csv";
+
 const FORCE_PLOT: &str = "forming-punch-force.png";
 const SHEAR_MAP: &str = "forming-shear-map.png";
 const SERIES: &str = "forming";
 
 fn products() -> ProductFiles {
     ProductFiles {
-        names: [CSV, FORCE_PLOT, SHEAR_MAP, FORMED_INP, FORMED_VTU]
-            .map(String::from)
-            .to_vec(),
+        names: [
+            CSV, RESULT_CSV, FORCE_PLOT, SHEAR_MAP, FORMED_INP, FORMED_VTU,
+        ]
+        .map(String::from)
+        .to_vec(),
         series: Some(SERIES.into()),
     }
 }
@@ -154,6 +162,73 @@ fn history<'a>(mut csv: CsvStream) -> HistorySink<'a, FormingRecord> {
         }
         Ok(())
     })
+}
+
+/// `forming-result.csv`: a header and one row, [`RESULT_COLUMNS`]. The area above the locking
+/// angle is the reference area (mm^2) of the elements sheared beyond `output.locking_angle`; the
+/// largest thinning is `1 - t / t0` of the thinnest element.
+fn write_result_row(
+    dir: &Path,
+    scenario: &Scenario,
+    forming: &FormingModel,
+    result: &FormingRun,
+) -> anyhow::Result<PathBuf> {
+    let last = result.records.last();
+    let model = &forming.model;
+    let (above_locking, thinning) = match &result.outcome {
+        Ok(state) => {
+            let gamma = shear_angles(model, state);
+            let above = scenario.output.locking_angle.map(|limit| {
+                model
+                    .elements
+                    .iter()
+                    .zip(&gamma)
+                    .filter(|(_, g)| g.abs() > limit)
+                    .map(|(e, _)| e.area)
+                    .fold(0.0, |sum, a| sum + a)
+            });
+            let t0 = model.laminate.reference_thickness();
+            let thinnest = state
+                .membrane
+                .iter()
+                .map(|m| m.thickness)
+                .fold(f64::INFINITY, f64::min);
+            (above, Some(1.0 - thinnest / t0))
+        }
+        Err(_) => (None, None),
+    };
+    let flange = |v: f64| forming.measures_flange().then_some(v);
+    let number = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v:e}"));
+    let peak = result
+        .records
+        .iter()
+        .map(|r| r.punch_force)
+        .fold(0.0, f64::max);
+    let status = status_row(&result.outcome).1.replace('"', "'");
+    let values = [
+        last.map(|r| r.stroke),
+        Some(peak),
+        last.map(|r| r.max_shear),
+        above_locking,
+        thinning,
+        last.and_then(|r| flange(r.wrinkles.height)),
+        last.and_then(|r| flange(r.wrinkles.area)),
+        last.and_then(|r| flange(r.wrinkles.waviness)),
+        last.and_then(|r| flange(r.wrinkles.wavy_area)),
+        last.map(|r| r.draw_in),
+        last.map(|r| r.energies.balance_error()),
+        Some(result.wall_seconds),
+    ];
+    let row: Vec<String> = std::iter::once(format!("\"{status}\""))
+        .chain(values.into_iter().map(number))
+        .collect();
+    let path = dir.join(RESULT_CSV);
+    std::fs::write(
+        &path,
+        format!("{}\n{}\n", RESULT_COLUMNS.join(","), row.join(",")),
+    )
+    .with_context(|| format!("cannot write {}", path.display()))?;
+    Ok(path)
 }
 
 /// `forming-punch-force.png`.
@@ -184,6 +259,8 @@ fn write_shear_map(
     let x = &state.positions;
     let map = MapPlot {
         title: "Formed part: shear angle (top view)".into(),
+        axes: ("x (mm)".into(), "y (mm)".into()),
+        equal_scales: true,
         value_label: match locking_angle {
             Some(l) => format!("|shear angle| (°), locking {l}° marked"),
             None => "|shear angle| (°)".into(),
@@ -199,6 +276,7 @@ fn write_shear_map(
             .map(f64::abs)
             .collect(),
         limit: locking_angle,
+        outlined: Vec::new(),
     };
     let path = dir.join(SHEAR_MAP);
     write_map_png(&path, &map, 900, 700)?;

@@ -1,6 +1,7 @@
 //! The `thermostamp` command line.
 //!
-//! Exit codes: 0 success; 1 a run that failed, diagnosed (the results so far are kept);
+//! Exit codes: 0 success; 1 a run that failed, diagnosed (the results so far are kept), or a
+//! study with a failed case;
 //! 2 bad input of any kind (usage, files, values, settings, or a history the material cannot
 //! follow), an output folder held by another run, or a result that could not be written (full
 //! disk, a folder that cannot be created); 130 interrupted by Ctrl-C or SIGTERM (the results so
@@ -12,6 +13,7 @@ mod fit_fabric_tension;
 mod forming_run;
 mod material_point;
 mod shared;
+mod sweep;
 mod virtual_test;
 
 use crate::solver::SolverError;
@@ -42,6 +44,9 @@ enum Command {
     Run(forming_run::Args),
     /// Kinematic draping preview of a scenario: the pin-jointed net on the formed punch.
     Drape(drape::Args),
+    /// A process study: a base scenario run over the full factorial of parameter values, each
+    /// case in its own folder, resumable, summarised in a table and charts (docs/study.md).
+    Sweep(sweep::Args),
     /// Parameter identification from test curves (docs/model.md §5): `fit matrix`,
     /// `fit fabric-tension`, `fit shear`.
     #[command(subcommand)]
@@ -63,6 +68,7 @@ pub fn main() -> i32 {
         Command::Run(args) => forming_run::run(&args),
         Command::Drape(args) => drape::run(&args),
         Command::Fit(command) => fit::run(&command),
+        Command::Sweep(args) => sweep::run(&args),
     };
     match result {
         Ok(()) => 0,
@@ -86,6 +92,9 @@ pub const EXIT_INTERRUPTED: i32 = 130;
 /// interrupted, 2 for everything else: bad input (found before the first step wherever it can
 /// be), and results that could not be written.
 fn exit_code(e: &anyhow::Error) -> i32 {
+    if e.downcast_ref::<sweep::CasesFailed>().is_some() {
+        return 1;
+    }
     match e.downcast_ref::<SolverError>() {
         Some(SolverError::Interrupted { .. }) => EXIT_INTERRUPTED,
         Some(SolverError::Output { .. } | SolverError::Settings(_)) | None => 2,

@@ -112,6 +112,28 @@ impl Observer for Recorder<'_, '_, '_> {
 
 /// Runs the forming model, recording at every output interval; `output` is written as the
 /// run goes.
+/// The run's outcome and final measures in one row, written by `thermostamp run` (what a
+/// study collects).
+pub const RESULT_CSV: &str = "forming-result.csv";
+
+/// Columns of [`RESULT_CSV`]: the status (text), then numbers; a measure the run could not
+/// take (no final state, no locking angle, no flange) is left empty.
+pub const RESULT_COLUMNS: [&str; 13] = [
+    "status",
+    "stroke_reached",
+    "peak_punch_force",
+    "max_shear_deg",
+    "area_above_locking",
+    "max_thinning",
+    "lift_off",
+    "lifted_area",
+    "waviness",
+    "wavy_area",
+    "draw_in",
+    "energy_balance_error",
+    "wall_seconds",
+];
+
 pub fn run(
     forming: &FormingModel,
     output: Option<LiveOutput<'_, FormingRecord>>,

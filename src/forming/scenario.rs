@@ -447,6 +447,36 @@ impl Scenario {
         Ok(scenario)
     }
 
+    /// The scenario at `path` with the `key=value` overrides applied and its file paths (the
+    /// card, a blank mesh, tool files) made absolute, as TOML text: a scenario that runs from
+    /// any folder, such as a study's case folder. Checked by loading it as [`Self::load`] does.
+    pub fn standalone_text(path: &Path, overrides: &[String]) -> Result<String, ScenarioError> {
+        let origin = path.display().to_string();
+        let error = |message: String| ScenarioError {
+            origin: origin.clone(),
+            message,
+        };
+        Self::load(path, overrides)?;
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| error(format!("cannot read the scenario: {e}")))?;
+        let mut table: toml::Table = from_toml_text(&text).map_err(error)?;
+        for o in overrides {
+            apply_override(&mut table, o).map_err(error)?;
+        }
+        let folder = path.parent().unwrap_or(Path::new("."));
+        let folder = std::path::absolute(folder).map_err(|e| error(e.to_string()))?;
+        for keys in [
+            &["blank", "card"][..],
+            &["blank", "mesh"],
+            &["tools", "punch", "file"],
+            &["tools", "die", "file"],
+            &["tools", "holder", "file"],
+        ] {
+            make_absolute(&mut table, keys, &folder);
+        }
+        toml::to_string(&table).map_err(|e| error(e.to_string()))
+    }
+
     /// The built-in tool set, or an error naming what needs it (`what`).
     pub fn built_in_tools(&self, what: &str) -> Result<&Tools, String> {
         match &self.tools {
@@ -732,6 +762,22 @@ fn apply_override(table: &mut toml::Table, assignment: &str) -> Result<(), Strin
     }
     here.insert(last.to_string(), value);
     Ok(())
+}
+
+/// The string at the path `keys` of `table`, if any, joined to `folder` (an absolute path stays
+/// as it is).
+fn make_absolute(table: &mut toml::Table, keys: &[&str], folder: &Path) {
+    let (last, parents) = keys.split_last().unwrap_or((&"", &[]));
+    let mut here = table;
+    for key in parents {
+        match here.get_mut(*key).and_then(toml::Value::as_table_mut) {
+            Some(t) => here = t,
+            None => return,
+        }
+    }
+    if let Some(toml::Value::String(s)) = here.get_mut(*last) {
+        *s = folder.join(&*s).display().to_string();
+    }
 }
 
 fn parse_scalar(raw: &str) -> toml::Value {

@@ -109,7 +109,10 @@ impl FormingModel {
             constraints,
         )
         .map_err(|e| e.to_string())?;
-        if let Some(rigidity) = card.bending {
+        if let Some(bending) = &card.bending {
+            let rigidity = bending
+                .at(p.temperature)
+                .map_err(|e| format!("process.temperature: {e}"))?;
             model = model.with_bending(rigidity).map_err(|e| e.to_string())?;
             notes.extend(soft_bending_note(s));
         }

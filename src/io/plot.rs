@@ -557,17 +557,28 @@ fn emptiest_corner(
 #[derive(Clone, Debug, PartialEq)]
 pub struct MapPlot {
     pub title: String,
+    /// Labels of the x and y axes, with units.
+    pub axes: (String, String),
+    /// Whether x and y share one scale (a part seen from above) or each fills the plot (a map
+    /// over two parameters).
+    pub equal_scales: bool,
     /// Label of the colour bar, with units.
     pub value_label: String,
-    /// The cells' corners (a polygon each), one value per cell.
+    /// The cells' corners (a polygon each), one value per cell; a value that is not finite
+    /// (no result) is drawn grey.
     pub cells: Vec<Vec<(f64, f64)>>,
     pub values: Vec<f64>,
     /// Values above this are flagged (e.g. the locking angle); `None`: no flag.
     pub limit: Option<f64>,
+    /// Cells drawn with a thick black outline, their colour kept (e.g. the cases of a study
+    /// that wrinkled); empty: none.
+    pub outlined: Vec<bool>,
 }
 
 /// Colour of the flagged cells and of the limit's mark.
 const LIMIT_COLOUR: RGBColor = RGBColor(230, 0, 200);
+/// Colour of the cells without a value.
+const MISSING_COLOUR: RGBColor = RGBColor(170, 170, 170);
 
 /// Blue (0) through cyan, green and yellow to red (1).
 fn colour_scale(t: f64) -> RGBColor {
@@ -645,12 +656,15 @@ fn draw_map(
     let (w, h) = left.dim_in_pixel();
     let aspect = f64::from(w) / f64::from(h);
     let (cx, cy, mut sx, mut sy) = (0.5 * (x0 + x1), 0.5 * (y0 + y1), x1 - x0, y1 - y0);
-    if sx / sy < aspect {
-        sx = sy * aspect;
-    } else {
-        sy = sx / aspect;
+    if map.equal_scales {
+        if sx / sy < aspect {
+            sx = sy * aspect;
+        } else {
+            sy = sx / aspect;
+        }
     }
-    let (sx, sy) = (0.55 * sx, 0.55 * sy);
+    let margin = if map.equal_scales { 0.55 } else { 0.5 };
+    let (sx, sy) = (margin * sx.max(1e-12), margin * sy.max(1e-12));
     let mut chart = ChartBuilder::on(&left)
         .caption(&map.title, font(22.0))
         .margin(px(12.0))
@@ -660,14 +674,15 @@ fn draw_map(
         .map_err(|e| e.to_string())?;
     chart
         .configure_mesh()
-        .x_desc("x (mm)")
-        .y_desc("y (mm)")
+        .x_desc(&map.axes.0)
+        .y_desc(&map.axes.1)
         .axis_desc_style(font(16.0))
         .label_style(font(13.0))
         .disable_mesh()
         .draw()
         .map_err(|e| e.to_string())?;
     let fill = |v: f64| match map.limit {
+        _ if !v.is_finite() => MISSING_COLOUR,
         Some(l) if v > l => LIMIT_COLOUR,
         _ => colour_scale(v / top),
     };
@@ -677,6 +692,19 @@ fn draw_map(
                 .iter()
                 .zip(&map.values)
                 .map(|(t, &v)| Polygon::new(t.clone(), fill(v).filled())),
+        )
+        .map_err(|e| e.to_string())?;
+    chart
+        .draw_series(
+            map.cells
+                .iter()
+                .zip(&map.outlined)
+                .filter(|(_, &outlined)| outlined)
+                .map(|(t, _)| {
+                    let mut ring = t.clone();
+                    ring.extend(t.first().copied());
+                    PathElement::new(ring, BLACK.stroke_width(px(3.0)))
+                }),
         )
         .map_err(|e| e.to_string())?;
 

@@ -4,7 +4,10 @@
 
 use super::fabric::{ShearInteraction, ShearTerm, YarnTension};
 use super::fabric_shear::DEFAULT_FRICTION_ONSET_DEG;
-use super::{Laminate, Layer, MaterialLaw, TemperatureTable, ViscoHyperelasticMatrix, WovenFabric};
+use super::{
+    Laminate, Layer, MaterialError, MaterialLaw, TemperatureTable, ViscoHyperelasticMatrix,
+    WovenFabric,
+};
 use crate::element::BendingRigidity;
 use crate::io::from_toml_text;
 use serde::Deserialize;
@@ -21,8 +24,41 @@ pub struct MaterialCard {
     pub matrix: Option<Arc<ViscoHyperelasticMatrix>>,
     pub fabric: Arc<WovenFabric>,
     pub laminate: Laminate,
-    /// Bending rigidity of the ply per unit width (docs/model.md §4); absent: a membrane.
-    pub bending: Option<BendingRigidity>,
+    /// Bending rigidity of the ply per unit width (docs/model.md §4), constant or a table in
+    /// temperature; absent: a membrane.
+    pub bending: Option<BendingCard>,
+}
+
+/// The card's `[bending]`: rigidities per unit width (N·mm), constant or given at temperatures
+/// and interpolated as the matrix's tables are (docs/model.md §4).
+#[derive(Clone, Debug, PartialEq)]
+pub enum BendingCard {
+    Constant(BendingRigidity),
+    Table {
+        warp: TemperatureTable,
+        weft: TemperatureTable,
+    },
+}
+
+impl BendingCard {
+    /// The rigidities at `temperature` (°C); outside a table an error.
+    pub fn at(&self, temperature: f64) -> Result<BendingRigidity, MaterialError> {
+        match self {
+            Self::Constant(r) => Ok(*r),
+            Self::Table { warp, weft } => Ok(BendingRigidity {
+                warp: warp.at(temperature)?,
+                weft: weft.at(temperature)?,
+            }),
+        }
+    }
+
+    /// The temperatures the table covers; `None` for constant rigidities.
+    pub fn range(&self) -> Option<(f64, f64)> {
+        match self {
+            Self::Constant(_) => None,
+            Self::Table { warp, .. } => Some(warp.range()),
+        }
+    }
 }
 
 /// What is wrong with a material card, and in which file.
@@ -45,12 +81,56 @@ struct CardFile {
 }
 
 /// `[bending]`: rigidities per unit width (N·mm) for curvature along warp and weft, as from
-/// cantilever (Peirce) tests of the prepreg at the forming temperature.
+/// cantilever (Peirce) tests of the prepreg at the forming temperature: numbers, or lists at
+/// the temperatures of `temperature`.
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct BendingSection {
-    warp: f64,
-    weft: f64,
+    temperature: Option<Vec<f64>>,
+    warp: NumberOrList,
+    weft: NumberOrList,
+}
+
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum NumberOrList {
+    Number(f64),
+    List(Vec<f64>),
+}
+
+impl BendingSection {
+    fn check(self) -> Result<BendingCard, String> {
+        let key = |name: &str| format!("[bending] {name}");
+        match (self.temperature, self.warp, self.weft) {
+            (None, NumberOrList::Number(warp), NumberOrList::Number(weft)) => {
+                let rigidity = BendingRigidity { warp, weft };
+                rigidity.validate().map_err(|e| format!("[bending] {e}"))?;
+                Ok(BendingCard::Constant(rigidity))
+            }
+            (Some(temperatures), NumberOrList::List(warp), NumberOrList::List(weft)) => {
+                for (name, values) in [("warp", &warp), ("weft", &weft)] {
+                    if let Some(v) = values.iter().find(|v| !(v.is_finite() && **v >= 0.0)) {
+                        return Err(format!(
+                            "[bending] {name} has {v}: bending rigidities are numbers >= 0 (N·mm)"
+                        ));
+                    }
+                }
+                Ok(BendingCard::Table {
+                    warp: TemperatureTable::new(key("warp"), temperatures.clone(), warp)?,
+                    weft: TemperatureTable::new(key("weft"), temperatures, weft)?,
+                })
+            }
+            (None, _, _) => Err(
+                "[bending] warp and weft are numbers (N·mm), or lists with a temperature list"
+                    .into(),
+            ),
+            (Some(_), _, _) => Err(
+                "[bending] with a temperature list, warp and weft are lists of the rigidity at \
+                 each temperature"
+                    .into(),
+            ),
+        }
+    }
 }
 
 #[derive(Deserialize)]
@@ -127,7 +207,12 @@ impl MaterialCard {
     /// The temperatures over which the card's tables are defined (all of them at once);
     /// `None` for a card with nothing tabulated (a dry fabric), which holds at any temperature.
     pub fn temperature_range(&self) -> Option<(f64, f64)> {
-        self.matrix.as_ref().map(|m| m.parameters_range())
+        let matrix = self.matrix.as_ref().map(|m| m.parameters_range());
+        let bending = self.bending.as_ref().and_then(BendingCard::range);
+        match (matrix, bending) {
+            (Some((a, b)), Some((c, d))) => Some((a.max(c), b.min(d))),
+            (one, other) => one.or(other),
+        }
     }
 
     /// Whether the card's tables cover `temperature` (°C), which `key` (a scenario key or a
@@ -181,19 +266,7 @@ impl CardFile {
             .map(Arc::new);
         let fabric = Arc::new(self.fabric.check()?);
         let laminate = self.layers.check(matrix.clone(), fabric.clone())?;
-        let bending = self
-            .bending
-            .map(|b| {
-                let rigidity = BendingRigidity {
-                    warp: b.warp,
-                    weft: b.weft,
-                };
-                rigidity
-                    .validate()
-                    .map(|()| rigidity)
-                    .map_err(|e| format!("[bending] {e}"))
-            })
-            .transpose()?;
+        let bending = self.bending.map(BendingSection::check).transpose()?;
         Ok(MaterialCard {
             name: self.name,
             density,
@@ -556,15 +629,50 @@ shear = [0.25, 0.0, 2.0]
         let card = MaterialCard::from_toml(&with, "card.toml").unwrap();
         assert_eq!(
             card.bending,
-            Some(BendingRigidity {
+            Some(BendingCard::Constant(BendingRigidity {
                 warp: 2.0,
                 weft: 0.5
-            })
+            }))
         );
         let negative = with.replace("weft = 0.5", "weft = -0.5");
         assert!(error_of(&negative).contains("[bending] bending rigidity weft"));
         let unknown = with.replace("weft = 0.5", "weft = 0.5\ntwist = 1.0");
         assert!(error_of(&unknown).contains("twist"));
+    }
+
+    /// Rigidities given at temperatures: interpolated, the card's range narrowed to the table's,
+    /// and a table that does not match its temperatures or mixes numbers and lists refused.
+    #[test]
+    fn bending_rigidity_may_be_a_temperature_table() {
+        let with = format!(
+            "{VALID}\n[bending]\ntemperature = [290.0, 310.0]\nwarp = [2.0, 1.0]\nweft = [1.0, 0.5]\n"
+        );
+        let card = MaterialCard::from_toml(&with, "card.toml").unwrap();
+        let bending = card.bending.as_ref().unwrap();
+        let at = bending.at(300.0).unwrap();
+        assert!((at.warp - 1.5).abs() < 1e-12 && (at.weft - 0.75).abs() < 1e-12);
+        assert_eq!(card.temperature_range(), Some((290.0, 310.0)));
+        assert!(card
+            .check_temperature("process.temperature", 285.0)
+            .is_err());
+        assert!(bending.at(315.0).is_err());
+        for (from, to, expected) in [
+            ("warp = [2.0, 1.0]", "warp = [2.0]", "has 1 values"),
+            ("warp = [2.0, 1.0]", "warp = 2.0", "lists of the rigidity"),
+            (
+                "warp = [2.0, 1.0]",
+                "warp = [2.0, -1.0]",
+                "[bending] warp has -1",
+            ),
+            (
+                "temperature = [290.0, 310.0]\n",
+                "",
+                "with a temperature list",
+            ),
+        ] {
+            let e = error_of(&with.replace(from, to));
+            assert!(e.contains(expected), "{to}: {e}");
+        }
     }
 
     #[test]

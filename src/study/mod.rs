@@ -1,0 +1,9 @@
+//! Process studies (`thermostamp sweep`, docs/study.md): a base forming scenario run over the
+//! full factorial of parameter values, each case in its own folder, resumable, and summarised
+//! in one table and charts.
+
+pub mod file;
+pub mod run;
+pub mod summary;
+
+pub use file::{Case, Parameter, Study, StudyError};
