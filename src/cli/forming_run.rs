@@ -217,7 +217,6 @@ fn write_result_row(
         last.and_then(|r| flange(r.wrinkles.wavy_area)),
         last.map(|r| r.draw_in),
         last.map(|r| r.energies.balance_error()),
-        Some(result.wall_seconds),
     ];
     let row: Vec<String> = std::iter::once(format!("\"{status}\""))
         .chain(values.into_iter().map(number))

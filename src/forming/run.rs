@@ -118,7 +118,7 @@ pub const RESULT_CSV: &str = "forming-result.csv";
 
 /// Columns of [`RESULT_CSV`]: the status (text), then numbers; a measure the run could not
 /// take (no final state, no locking angle, no flange) is left empty.
-pub const RESULT_COLUMNS: [&str; 13] = [
+pub const RESULT_COLUMNS: [&str; 12] = [
     "status",
     "stroke_reached",
     "peak_punch_force",
@@ -131,7 +131,6 @@ pub const RESULT_COLUMNS: [&str; 13] = [
     "wavy_area",
     "draw_in",
     "energy_balance_error",
-    "wall_seconds",
 ];
 
 pub fn run(

@@ -10,12 +10,9 @@ use crate::io::plot::{write_map_png, write_png, LinePlot, LineStyle, MapPlot, Se
 use std::path::{Path, PathBuf};
 
 /// The run's final measures a summary row carries: the columns of its `forming-result.csv`
-/// ([`RESULT_COLUMNS`]) between the status and the wall time.
+/// ([`RESULT_COLUMNS`]) after the status.
 pub const MEASURES: &[&str] = match RESULT_COLUMNS.split_first() {
-    Some((_, rest)) => match rest.split_last() {
-        Some((_, measures)) => measures,
-        None => rest,
-    },
+    Some((_, measures)) => measures,
     None => &RESULT_COLUMNS,
 };
 pub const SUMMARY_CSV: &str = "summary.csv";
