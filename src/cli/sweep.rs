@@ -1,7 +1,7 @@
 //! `thermostamp sweep study.toml`: a process study, every case a forming run in its own folder
 //! (docs/study.md), a progress line per finished case, a summary table and charts.
 
-use crate::study::run::{finished, run_cases, Finished};
+use crate::study::run::{finished, run_cases, CaseResult, Finished};
 use crate::study::summary::{rows, write_summary, Row};
 use crate::study::{Case, Study};
 use std::path::PathBuf;
@@ -59,9 +59,8 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         let case = cases.get(n.wrapping_sub(1)).ok_or_else(|| {
             anyhow::anyhow!("--case {n}: the study has cases 1 to {}", cases.len())
         })?;
-        sweep(&study, &[case], Some(1))?;
-        return match finished(&study.case_folder(case)) {
-            Some(r) if !r.done() => Err(CasesFailed {
+        return match sweep(&study, &[case], Some(1))?.first() {
+            Some((_, r)) if !r.done() => Err(CasesFailed {
                 failed: 1,
                 total: 1,
                 summary: study
@@ -116,8 +115,13 @@ fn list(study: &Study, cases: &[Case]) {
     }
 }
 
-/// Runs `cases`, a progress line on standard error as each finishes.
-fn sweep(study: &Study, cases: &[&Case], jobs: Option<usize>) -> anyhow::Result<()> {
+/// Runs `cases`, a progress line on standard error as each finishes; their results in case
+/// order.
+fn sweep(
+    study: &Study,
+    cases: &[&Case],
+    jobs: Option<usize>,
+) -> anyhow::Result<Vec<(usize, CaseResult)>> {
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let jobs = jobs
         .unwrap_or((cores / study.threads_per_case).max(1))
@@ -149,8 +153,7 @@ fn sweep(study: &Study, cases: &[&Case], jobs: Option<usize>) -> anyhow::Result<
             eta
         );
     };
-    run_cases(study, cases, jobs, &exe, &report)?;
-    Ok(())
+    run_cases(study, cases, jobs, &exe, &report)
 }
 
 /// The summary as a table on standard output.

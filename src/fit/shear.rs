@@ -61,6 +61,8 @@ pub struct ShearPoint {
     pub gamma: f64,
     /// Normalised shear force (N/mm).
     pub force: f64,
+    /// The measured crosshead force it was normalised from (N).
+    pub crosshead_force: f64,
     /// Line of the curve point it comes from.
     pub line: usize,
 }
@@ -70,8 +72,6 @@ pub struct ShearPoint {
 pub struct ShearFit {
     /// The terms fitted, in the order of the parameters.
     pub terms: Vec<ShearTerm>,
-    /// Thickness of the fabric layers `t_B` the fit assumed (mm).
-    pub thickness: f64,
     /// Their coefficients (MPa) with their standard errors and the RMS relative residual.
     pub result: FitResult,
     /// The data's points normalised (`gamma`, `F_sh`), those the fit used (`gamma <=
@@ -214,6 +214,7 @@ pub fn shear_points(curve: &ForceCurve, test: &ShearTest) -> Result<Vec<ShearPoi
         .map(|((gamma, force), &i)| ShearPoint {
             gamma,
             force,
+            crosshead_force: curve.force[i],
             line: curve.lines[i],
         })
         .collect())
@@ -253,28 +254,20 @@ pub struct FittedPoint {
 ///
 /// Each row of the returned matrix is `d observation / d coefficient` of one point.
 fn observations(
-    curve: &ForceCurve,
     test: &ShearTest,
     thickness: f64,
     terms: &[ShearTerm],
     points: &[ShearPoint],
 ) -> (DMatrix<f64>, DVector<f64>) {
     match *test {
-        ShearTest::BiasExtension { width, length } => {
-            let force: Vec<f64> = points
-                .iter()
-                .map(|p| {
-                    let i = curve.lines.iter().position(|&l| l == p.line).unwrap_or(0);
-                    curve.force[i]
-                })
-                .collect();
-            let basis = DMatrix::from_fn(points.len(), terms.len(), |i, j| {
+        ShearTest::BiasExtension { width, length } => (
+            DMatrix::from_fn(points.len(), terms.len(), |i, j| {
                 bias_extension_force(width, length, points[i].gamma, |g| {
                     terms[j].force_basis(thickness, g)
                 })
-            });
-            (basis, DVector::from_vec(force))
-        }
+            }),
+            DVector::from_iterator(points.len(), points.iter().map(|p| p.crosshead_force)),
+        ),
         ShearTest::PictureFrame { .. } => (
             DMatrix::from_fn(points.len(), terms.len(), |i, j| {
                 terms[j].force_basis(thickness, points[i].gamma)
@@ -400,7 +393,7 @@ pub fn fit_shear(
             points.len(),
         ));
     }
-    let (basis, data) = observations(curve, test, thickness, terms, &points);
+    let (basis, data) = observations(test, thickness, terms, &points);
     let problem = ShearResiduals::new(basis, data);
     let result = fit(&problem, &vec![0.0; terms.len()]).map_err(|e| fail(e, points.len()))?;
     let law = ShearInteraction::of(terms, &result.parameters);
@@ -450,7 +443,6 @@ pub fn fit_shear(
     };
     Ok(ShearFit {
         terms: terms.to_vec(),
-        thickness,
         quantity,
         rms,
         rms_of_mean: rms / mean.abs().max(f64::MIN_POSITIVE),

@@ -427,10 +427,7 @@ impl Scenario {
         let file: ScenarioFile = if overrides.is_empty() {
             from_toml_text(&text).map_err(error)?
         } else {
-            let mut table: toml::Table = from_toml_text(&text).map_err(error)?;
-            for o in overrides {
-                apply_override(&mut table, o).map_err(error)?;
-            }
+            let table = overridden_table(&text, overrides).map_err(error)?;
             from_toml_value(toml::Value::Table(table))
                 .map_err(|e| error(format!("{e} (with --set {})", overrides.join(" --set "))))?
         };
@@ -459,10 +456,7 @@ impl Scenario {
         Self::load(path, overrides)?;
         let text = std::fs::read_to_string(path)
             .map_err(|e| error(format!("cannot read the scenario: {e}")))?;
-        let mut table: toml::Table = from_toml_text(&text).map_err(error)?;
-        for o in overrides {
-            apply_override(&mut table, o).map_err(error)?;
-        }
+        let mut table = overridden_table(&text, overrides).map_err(error)?;
         let folder = path.parent().unwrap_or(Path::new("."));
         let folder = std::path::absolute(folder).map_err(|e| error(e.to_string()))?;
         for keys in [
@@ -762,6 +756,15 @@ fn apply_override(table: &mut toml::Table, assignment: &str) -> Result<(), Strin
     }
     here.insert(last.to_string(), value);
     Ok(())
+}
+
+/// The scenario `text` as a TOML table with the `key=value` overrides applied.
+fn overridden_table(text: &str, overrides: &[String]) -> Result<toml::Table, String> {
+    let mut table: toml::Table = from_toml_text(text)?;
+    for o in overrides {
+        apply_override(&mut table, o)?;
+    }
+    Ok(table)
 }
 
 /// The string at the path `keys` of `table`, if any, joined to `folder` (an absolute path stays

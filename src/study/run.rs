@@ -140,48 +140,55 @@ pub fn run_cases(
     exe: &Path,
     report: &(dyn Fn(Finished) + Sync),
 ) -> anyhow::Result<Vec<(usize, CaseResult)>> {
+    /// The cases finished so far, and the first case that could not be run.
+    struct Progress {
+        done: Vec<(usize, CaseResult)>,
+        error: Option<String>,
+    }
     let next = AtomicUsize::new(0);
-    let done = Mutex::new(Vec::new());
-    let errors = Mutex::new(Vec::new());
+    let progress = Mutex::new(Progress {
+        done: Vec::new(),
+        error: None,
+    });
+    let lock = || progress.lock().unwrap_or_else(|e| e.into_inner());
     let start = Instant::now();
     std::thread::scope(|scope| {
         for _ in 0..jobs.clamp(1, cases.len().max(1)) {
-            scope.spawn(|| loop {
-                let i = next.fetch_add(1, Ordering::SeqCst);
-                let Some(case) = cases.get(i) else { break };
-                if !errors.lock().map(|e| e.is_empty()).unwrap_or(false) {
-                    break;
-                }
-                match run_case(study, case, exe) {
-                    Ok(result) => {
-                        let mut done = done.lock().unwrap_or_else(|e| e.into_inner());
-                        done.push((case.number, result.clone()));
-                        report(Finished {
-                            case,
-                            result,
-                            count: done.len(),
-                            of: cases.len(),
-                            elapsed: start.elapsed().as_secs_f64(),
-                        });
+            scope.spawn(|| {
+                while let Some(case) = cases.get(next.fetch_add(1, Ordering::SeqCst)) {
+                    if lock().error.is_some() {
+                        break;
                     }
-                    Err(e) => errors
-                        .lock()
-                        .unwrap_or_else(|e| e.into_inner())
-                        .push(format!("case {}: {e}", case.number)),
+                    let outcome = run_case(study, case, exe);
+                    let mut p = lock();
+                    match outcome {
+                        Ok(result) => {
+                            p.done.push((case.number, result.clone()));
+                            report(Finished {
+                                case,
+                                result,
+                                count: p.done.len(),
+                                of: cases.len(),
+                                elapsed: start.elapsed().as_secs_f64(),
+                            });
+                        }
+                        Err(e) => {
+                            p.error.get_or_insert(format!("case {}: {e}", case.number));
+                        }
+                    }
                 }
             });
         }
     });
-    let errors = errors.into_inner().unwrap_or_else(|e| e.into_inner());
-    if let Some(first) = errors.first() {
-        anyhow::bail!("{first}");
+    let Progress { mut done, error } = progress.into_inner().unwrap_or_else(|e| e.into_inner());
+    if let Some(error) = error {
+        anyhow::bail!("{error}");
     }
-    let mut done = done.into_inner().unwrap_or_else(|e| e.into_inner());
     done.sort_by_key(|(n, _)| *n);
     Ok(done)
 }
 
-/// The case folders of `study` that hold a finished case.
+/// Every case of `study` with its folder and, for a finished case, its result.
 pub fn finished_cases(study: &Study) -> Vec<(Case, PathBuf, Option<CaseResult>)> {
     study
         .cases()

@@ -230,27 +230,6 @@ fn heat_map(
         v
     };
     let (xs, ys) = (axis(0), axis(1));
-    let span = |values: &[f64], v: f64| {
-        let i = values.iter().position(|x| *x == v).unwrap_or(0);
-        let half = |a: f64, b: f64| 0.5 * (b - a).abs();
-        let width = match values.len() {
-            1 => 1.0,
-            _ => {
-                let left = if i > 0 {
-                    half(values[i - 1], v)
-                } else {
-                    half(v, values[1])
-                };
-                let right = if i + 1 < values.len() {
-                    half(v, values[i + 1])
-                } else {
-                    half(values[i - 1], v)
-                };
-                return (v - left, v + right);
-            }
-        };
-        (v - width, v + width)
-    };
     let mut cells = Vec::new();
     let mut values = Vec::new();
     let mut outlined = Vec::new();
@@ -258,7 +237,7 @@ fn heat_map(
         let (Some(x), Some(y)) = (number(&r.case.values[0]), number(&r.case.values[1])) else {
             continue;
         };
-        let ((x0, x1), (y0, y1)) = (span(&xs, x), span(&ys, y));
+        let ((x0, x1), (y0, y1)) = (cell_span(&xs, x), cell_span(&ys, y));
         cells.push(vec![(x0, y0), (x1, y0), (x1, y1), (x0, y1)]);
         let value = if r.status == "done" {
             r.measure(measure).unwrap_or(f64::NAN)
@@ -291,6 +270,21 @@ fn heat_map(
     }
 }
 
+/// The extent of the cell of `v` among the increasing `values`: halfway to each neighbour, an
+/// end cell as wide on its open side as on the other; 1 either side of a lone value.
+fn cell_span(values: &[f64], v: f64) -> (f64, f64) {
+    let i = values.partition_point(|x| *x < v);
+    let gap = |a: usize| 0.5 * (values[a + 1] - values[a]);
+    match values.len() {
+        0 | 1 => (v - 1.0, v + 1.0),
+        n => {
+            let left = gap(i.max(1) - 1);
+            let right = gap(i.min(n - 2));
+            (v - left, v + right)
+        }
+    }
+}
+
 /// The measure against the first parameter, done cases only.
 fn line_chart(study: &Study, rows: &[&Row], measure: &str, label: &str) -> LinePlot {
     let mut points: Vec<(f64, f64)> = rows
@@ -310,6 +304,17 @@ fn line_chart(study: &Study, rows: &[&Row], measure: &str, label: &str) -> LineP
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Cells reach halfway to their neighbours; end cells mirror their inner half; a lone
+    /// value gets a cell of width 2.
+    #[test]
+    fn heat_map_cells_reach_halfway_to_their_neighbours() {
+        let values = [0.0, 100.0, 300.0];
+        assert_eq!(cell_span(&values, 0.0), (-50.0, 50.0));
+        assert_eq!(cell_span(&values, 100.0), (50.0, 200.0));
+        assert_eq!(cell_span(&values, 300.0), (200.0, 400.0));
+        assert_eq!(cell_span(&[280.0], 280.0), (279.0, 281.0));
+    }
 
     /// A quoted first field keeps its commas.
     #[test]
