@@ -214,7 +214,7 @@ impl SweptProfile {
         let gap = to_q[0].hypot(to_q[1]);
         let (normal2, distance, meridian_turn) = match edge {
             true if ahead > 0.0 && gap > 0.0 => ([to_q[0] / gap, to_q[1] / gap], gap, 1.0 / gap),
-            true => (foot.normal, ahead, 0.0),
+            true => beside_the_edge(to_q, foot.normal, ahead),
             false => {
                 let k = foot.curvature;
                 (foot.normal, ahead, k / (1.0 + k * ahead))
@@ -292,6 +292,22 @@ impl SweptProfile {
             meridian_turn
         };
         hoop * hoop.transpose() * rate
+    }
+}
+
+/// Behind the surface's level but past its edge (a point in a holder's hole, below its top)
+/// the point is beside the tool, not in it: the tool ends there in a wall through the edge,
+/// square to the surface, and the distance is the one to that wall, along the surface's
+/// outward tangent at the edge. It meets the edge's own distance where `ahead = 0`. Taken as
+/// the surface's level instead, a sheet sagging into the hole a millimetre from the rim would
+/// be deep inside the tool, pushed by hundreds of newtons.
+fn beside_the_edge(to_q: [f64; 2], normal: [f64; 2], ahead: f64) -> ([f64; 2], f64, f64) {
+    let along = [to_q[0] - ahead * normal[0], to_q[1] - ahead * normal[1]];
+    let past = along[0].hypot(along[1]);
+    if past > 0.0 {
+        ([along[0] / past, along[1] / past], past, 0.0)
+    } else {
+        (normal, ahead, 0.0)
     }
 }
 
@@ -385,21 +401,72 @@ mod tests {
             (0.0, Vector3::new(0.0, 31.0, -0.5)),
         ];
         for (half_length, y) in points {
-            let shape = die(half_length);
+            the_normal_and_turn_are_derivatives(&die(half_length), &y);
+        }
+    }
+
+    /// The normal at `y` is the distance's gradient (central differences) and the turn the
+    /// normal's, symmetric and tangent to the surface.
+    fn the_normal_and_turn_are_derivatives(shape: &SweptProfile, y: &Vector3<f64>) {
+        let foot = shape.nearest(y);
+        let h = 1e-6;
+        for d in 0..3 {
+            let mut step = Vector3::zeros();
+            step[d] = h;
+            let (plus, minus) = (shape.nearest(&(y + step)), shape.nearest(&(y - step)));
+            let slope = (plus.distance - minus.distance) / (2.0 * h);
+            assert!((slope - foot.normal[d]).abs() < 1e-7, "{y} {d}");
+            let column = (plus.normal - minus.normal) / (2.0 * h);
+            let error = (column - foot.turn.column(d)).norm();
+            assert!(error < 1e-6, "{y} {d}: {error}, {}", foot.turn);
+        }
+        assert!((foot.turn - foot.turn.transpose()).norm() < 1e-12);
+        assert!((foot.turn * foot.normal).norm() < 1e-12, "{y}");
+    }
+
+    /// A holder's plate, `10 <= r <= 30` in `z = 0`, normal `+z`, around a ridge of
+    /// `half_length`.
+    fn holder(half_length: f64) -> SweptProfile {
+        SweptProfile::new(
+            vec![ProfilePiece::Line {
+                from: [10.0, 0.0],
+                to: [30.0, 0.0],
+            }],
+            half_length,
+        )
+    }
+
+    /// In the holder's hole below its top, a point is beside the holder, not in it: its
+    /// distance is the one to the hole's wall (`10 - r`), its normal points away from the
+    /// wall, and the two agree with the edge's own where the point is level with the top;
+    /// above the plate and behind it the plate's distance holds.
+    #[test]
+    fn below_the_top_in_a_holders_hole_the_distance_is_to_the_wall() {
+        let shape = holder(0.0);
+        let beside = shape.nearest(&Vector3::new(0.0, -8.64, -0.155));
+        assert!(
+            (beside.distance - 1.36).abs() < 1e-12,
+            "{}",
+            beside.distance
+        );
+        assert!((beside.normal - Vector3::new(0.0, 1.0, 0.0)).norm() < 1e-12);
+        let level = shape.nearest(&Vector3::new(0.0, -8.64, 0.0));
+        assert!((level.distance - 1.36).abs() < 1e-12);
+        assert!((level.normal - beside.normal).norm() < 1e-12);
+        let on_plate = shape.nearest(&Vector3::new(0.0, -12.0, -0.155));
+        assert!((on_plate.distance + 0.155).abs() < 1e-12);
+        assert!((on_plate.normal - Vector3::z()).norm() < 1e-12);
+        for (half_length, y) in [
+            (0.0, Vector3::new(3.0, -8.0, -0.4)),
+            (0.0, Vector3::new(6.0, 7.0, -2.0)),
+            (8.0, Vector3::new(2.0, 9.0, -0.3)),
+            (8.0, Vector3::new(-11.0, -5.0, -0.6)),
+        ] {
+            let shape = holder(half_length);
             let foot = shape.nearest(&y);
-            let h = 1e-6;
-            for d in 0..3 {
-                let mut step = Vector3::zeros();
-                step[d] = h;
-                let (plus, minus) = (shape.nearest(&(y + step)), shape.nearest(&(y - step)));
-                let slope = (plus.distance - minus.distance) / (2.0 * h);
-                assert!((slope - foot.normal[d]).abs() < 1e-7, "{y} {d}");
-                let column = (plus.normal - minus.normal) / (2.0 * h);
-                let error = (column - foot.turn.column(d)).norm();
-                assert!(error < 1e-6, "{y} {d}: {error}, {}", foot.turn);
-            }
-            assert!((foot.turn - foot.turn.transpose()).norm() < 1e-12);
-            assert!((foot.turn * foot.normal).norm() < 1e-12, "{y}");
+            assert!(foot.distance > 0.0, "{y}: {}", foot.distance);
+            assert_eq!(foot.normal.z, 0.0, "{y}");
+            the_normal_and_turn_are_derivatives(&shape, &y);
         }
     }
 
