@@ -407,3 +407,37 @@ fn shipped_twintex_card_is_the_fit_of_the_benchmark_curve() {
     assert_eq!(std::fs::read_to_string(&output).unwrap(), shipped);
     assert!(std::fs::metadata(&plot).unwrap().len() > 1000);
 }
+
+/// `thermostamp fit shear ... | head`: the reader closes the output before the table is
+/// printed. The card is written first, and the process ends as a Unix tool does, by SIGPIPE
+/// (or done before the reader closed), never by a panic on the failed write (exit 101).
+#[cfg(unix)]
+#[test]
+fn a_closed_output_keeps_the_card_and_ends_without_a_panic() {
+    use std::os::unix::process::ExitStatusExt;
+    use std::process::{Command, Stdio};
+    let dir = scratch_dir("fit-shear", "closed-pipe");
+    let data = synthetic_curve(&dir);
+    let card = dir.join("fitted.toml");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_thermostamp"))
+        .args(["fit", "shear", "--data"])
+        .arg(&data)
+        .args(["--width", "150", "--length", "450", "--card"])
+        .arg(repo_path("tests/data/stiff-yarn-fabric.toml"))
+        .arg("--output")
+        .arg(&card)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("the binary runs");
+    drop(child.stdout.take());
+    let out = child.wait_with_output().expect("the process ends");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        out.status.signal() == Some(libc::SIGPIPE) || out.status.code() == Some(0),
+        "{:?}: {stderr}",
+        out.status
+    );
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    MaterialCard::load(&card).expect("the fitted card was written and loads");
+}

@@ -182,8 +182,10 @@ fn run_shear(args: &ShearArgs) -> anyhow::Result<()> {
     let curve = matrix.as_ref().map_or(&measured, |m| &m.fabric);
     let terms = shear_terms(args)?;
     let fit = fit_shear(curve, &test, thickness, &terms, args.max_shear.to_radians())?;
-    print_shear_table(&fit, matrix.as_ref());
+    // the analytic fit before the FE loop starts (it takes minutes); without one, the card
+    // is written first, so that a reader closing the output early does not lose it
     let refined = if args.refine_fe {
+        print_shear_table(&fit, matrix.as_ref());
         Some(refine(args, &card, &measured, &fit)?)
     } else {
         None
@@ -199,6 +201,9 @@ fn run_shear(args: &ShearArgs) -> anyhow::Result<()> {
     // The card must still load; anything else is a bug here, caught before writing.
     MaterialCard::from_toml(&written, &origin)?;
     std::fs::write(&args.output, &written).with_context(|| format!("cannot write {origin}"))?;
+    if !args.refine_fe {
+        print_shear_table(&fit, matrix.as_ref());
+    }
     if let Some(png) = &args.plot {
         let plot = match &refined {
             Some(r) => refined_plot(r),

@@ -5,7 +5,8 @@
 //! 2 bad input of any kind (usage, files, values, settings, or a history the material cannot
 //! follow), an output folder held by another run, or a result that could not be written (full
 //! disk, a folder that cannot be created); 130 interrupted by Ctrl-C or SIGTERM (the results so
-//! far are kept). Errors are one line on standard error.
+//! far are kept); killed by SIGPIPE when standard output is closed by its reader, as any Unix
+//! tool. Errors are one line on standard error.
 
 mod drape;
 mod fit;
@@ -55,6 +56,7 @@ enum Command {
 
 /// Runs the command line and returns the process exit code.
 pub fn main() -> i32 {
+    end_quietly_on_a_closed_pipe();
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => {
@@ -82,6 +84,19 @@ pub fn main() -> i32 {
             }
             code
         }
+    }
+}
+
+/// Standard output closed by its reader (`thermostamp ... | head`) ends the process as it
+/// ends any Unix tool, by SIGPIPE, instead of a panic on the failed write (Rust ignores the
+/// signal by default). The results a command writes to files are written before it prints
+/// them.
+fn end_quietly_on_a_closed_pipe() {
+    #[cfg(unix)]
+    // SAFETY: called first thing in `main`, before any thread is spawned; restoring a signal's
+    // default disposition touches no memory of this process.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
 }
 
