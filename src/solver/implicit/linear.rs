@@ -3,17 +3,23 @@
 //! fill-reducing ordering and symbolic analysis are made once per sparsity pattern and reused
 //! by every factorisation on it.
 //!
-//! The factorisation runs on one thread: its sums then come in the same order on any machine,
-//! so results do not depend on the thread count; the element loops around it run in parallel.
+//! The numeric factorisation of a supernodal structure is this crate's own (`supernodal.rs`):
+//! faer's, in the same layout, but with independent subtrees of the elimination tree factorised
+//! side by side; its splits are fixed by the structure, so its sums come in the same order on
+//! any number of threads and results do not depend on the thread count. faer's simplicial
+//! factorisation, for the small or very sparse matrices it chooses it for, runs on one thread.
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::sparse::linalg::amd;
 use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky,
-    SymmetricOrdering,
+    SymbolicCholeskyRaw, SymmetricOrdering,
 };
+use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Conj, MatMut, Par, Side};
+
+use super::supernodal::{self, Supernodal};
 
 /// The lower triangle of a symmetric sparsity pattern, compressed by columns, rows sorted,
 /// stored in an elimination order chosen for it: the unknown `i` is row and column
@@ -117,14 +123,18 @@ impl Pattern {
 
     /// Entries of the Cholesky factor of a matrix of this pattern, fill-in included.
     pub fn factor_entries(&self) -> Result<usize, String> {
-        Ok(symbolic_factorisation(self)?.len_val())
+        Ok(symbolic_factorisation(self, SupernodalThreshold::AUTO)?.len_val())
     }
 }
 
 /// The symbolic Cholesky factorisation of the stored matrix, in its stored order. faer reads
 /// the upper triangle when it is given no ordering, so the structure is handed over
-/// transposed; the numeric factorisation takes the lower triangle as stored.
-fn symbolic_factorisation(pattern: &Pattern) -> Result<SymbolicCholesky<usize>, String> {
+/// transposed; the numeric factorisation takes the lower triangle as stored. `supernodal`
+/// says when the factorisation is supernodal (faer's choice by default).
+fn symbolic_factorisation(
+    pattern: &Pattern,
+    supernodal: SupernodalThreshold,
+) -> Result<SymbolicCholesky<usize>, String> {
     let n = pattern.size();
     let (col_ptr, row_idx) = (pattern.symbolic.col_ptr(), pattern.symbolic.row_idx());
     let mut upper: Vec<Vec<usize>> = vec![Vec::new(); n];
@@ -145,7 +155,10 @@ fn symbolic_factorisation(pattern: &Pattern) -> Result<SymbolicCholesky<usize>, 
         upper.as_ref(),
         Side::Upper,
         SymmetricOrdering::Identity,
-        CholeskySymbolicParams::default(),
+        CholeskySymbolicParams {
+            supernodal_flop_ratio_threshold: supernodal,
+            ..Default::default()
+        },
     )
     .map_err(|e| format!("symbolic factorisation of the tangent: {e:?}"))
 }
@@ -269,12 +282,37 @@ pub struct Cholesky {
     scratch: MemBuffer,
     /// Where each unknown is stored (the pattern's order).
     position: Vec<usize>,
+    /// The tree-parallel numeric factorisation, where faer chose a supernodal one; faer's
+    /// simplicial factorisation (of small or very sparse matrices) otherwise.
+    supernodal: Option<Supernodal>,
 }
 
 impl Cholesky {
     /// The symbolic factorisation of `pattern`.
     pub fn analyse(pattern: &Pattern) -> Result<Self, String> {
-        let symbolic = symbolic_factorisation(pattern)?;
+        Self::analyse_with(
+            pattern,
+            SupernodalThreshold::AUTO,
+            supernodal::PARALLEL_FLOPS,
+        )
+    }
+
+    /// [`Self::analyse`], supernodal as `supernodal` says, whose tasks under `parallel_flops`
+    /// estimated flops run on one thread.
+    fn analyse_with(
+        pattern: &Pattern,
+        supernodal: SupernodalThreshold,
+        parallel_flops: f64,
+    ) -> Result<Self, String> {
+        let symbolic = symbolic_factorisation(pattern, supernodal)?;
+        let supernodal = match symbolic.raw() {
+            SymbolicCholeskyRaw::Supernodal(structure) => Some(Supernodal::new(
+                structure,
+                pattern.symbolic.as_ref(),
+                parallel_flops,
+            )),
+            SymbolicCholeskyRaw::Simplicial(_) => None,
+        };
         let factor = vec![0.0; symbolic.len_val()];
         let scratch = MemBuffer::new(StackReq::any_of(&[
             symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
@@ -286,6 +324,7 @@ impl Cholesky {
             factored: false,
             scratch,
             position: pattern.position.clone(),
+            supernodal,
         })
     }
 
@@ -301,6 +340,13 @@ impl Cholesky {
         values: &[f64],
     ) -> Result<(), NotPositiveDefinite> {
         self.factored = false;
+        if let Some(supernodal) = &self.supernodal {
+            supernodal
+                .factorise(&mut self.factor, values)
+                .map_err(|_| NotPositiveDefinite)?;
+            self.factored = true;
+            return Ok(());
+        }
         let matrix = SparseColMatRef::new(pattern.symbolic.as_ref(), values);
         self.symbolic
             .factorize_numeric_llt(
@@ -366,10 +412,165 @@ mod tests {
         }
         let back = pattern.multiply(&values, &x);
         assert!((back[n - 1] - 1.0).abs() < 1e-9 && back[0].abs() < 1e-9);
+        // the same chain through the supernodal factorisation, one supernode a task
+        let mut forced =
+            Cholesky::analyse_with(&pattern, SupernodalThreshold::FORCE_SUPERNODAL, 0.0).unwrap();
+        assert!(forced.supernodal.is_some());
+        forced.factorise(&pattern, &values).unwrap();
+        let reference = faer_factor(&mut forced, &pattern, &values);
+        assert_close(&forced, &forced.factor, &reference);
+        let mut y = vec![0.0; n];
+        y[n - 1] = 1.0;
+        forced.solve(&mut y);
+        assert!(y.iter().zip(&x).all(|(a, b)| (a - b).abs() < 1e-9));
         values[pattern.place(n - 1, n - 1).unwrap()] = 0.5;
         assert_eq!(
             cholesky.factorise(&pattern, &values),
             Err(NotPositiveDefinite)
         );
+        assert_eq!(
+            forced.factorise(&pattern, &values),
+            Err(NotPositiveDefinite)
+        );
+    }
+
+    /// faer's own supernodal factorisation of `values` on `cholesky`'s structure.
+    fn faer_factor(cholesky: &mut Cholesky, pattern: &Pattern, values: &[f64]) -> Vec<f64> {
+        let mut factor = vec![0.0; cholesky.factor.len()];
+        cholesky
+            .symbolic
+            .factorize_numeric_llt(
+                &mut factor,
+                SparseColMatRef::new(pattern.symbolic.as_ref(), values),
+                Side::Lower,
+                Default::default(),
+                Par::Seq,
+                MemStack::new(&mut cholesky.scratch),
+                Default::default(),
+            )
+            .unwrap();
+        factor
+    }
+
+    /// The factor `a` equals `b` to 1e-12 of `b`'s largest entry (their lower triangles).
+    fn assert_close(cholesky: &Cholesky, a: &[f64], b: &[f64]) {
+        let lower = |f| cholesky.supernodal.as_ref().unwrap().lower(f);
+        let (a, b) = (&lower(a), &lower(b));
+        let scale = b.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        let error = a
+            .iter()
+            .zip(b)
+            .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+        assert_eq!(a.len(), b.len());
+        assert!(error <= 1e-12 * scale, "{error:e} of {scale:e}");
+    }
+
+    /// A `side` x `side` grid whose nodes are coupled within two steps (the patches of 3 x 3
+    /// nodes of quadratic elements), in nested dissection order, with random couplings and a
+    /// dominant diagonal: symmetric positive definite. Its lower triangle as stored.
+    fn grid(side: usize, seed: u64) -> (Pattern, Vec<f64>) {
+        let node = |i: usize, j: usize| i * side + j;
+        let mut patches = Vec::new();
+        for i in 0..side - 2 {
+            for j in 0..side - 2 {
+                patches.push(
+                    (0..9)
+                        .map(|k| node(i + k / 3, j + k % 3))
+                        .collect::<Vec<_>>(),
+                );
+            }
+        }
+        let points: Vec<[f64; 3]> = (0..side * side)
+            .map(|k| [(k / side) as f64, (k % side) as f64, 0.0])
+            .collect();
+        let mut neighbours = vec![Vec::new(); side * side];
+        for patch in &patches {
+            for &a in patch {
+                neighbours[a].extend(patch.iter().copied().filter(|&b| b != a));
+            }
+        }
+        let order = nested_dissection(&points, &neighbours);
+        let pattern =
+            Pattern::from_groups_in_order(side * side, patches.iter().map(|p| &p[..]), order);
+        let mut state = seed;
+        let mut random = move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        let mut values = vec![0.0; pattern.entries()];
+        let mut diagonal = vec![1.0; side * side];
+        for a in 0..side * side {
+            for &b in &neighbours[a] {
+                if a < b && values[pattern.place(a, b).unwrap()] == 0.0 {
+                    let v = random();
+                    values[pattern.place(a, b).unwrap()] = v;
+                    diagonal[a] += v.abs();
+                    diagonal[b] += v.abs();
+                }
+            }
+        }
+        for (a, d) in diagonal.iter().enumerate() {
+            values[pattern.place(a, a).unwrap()] = *d;
+        }
+        (pattern, values)
+    }
+
+    /// The tree-parallel factor equals faer's, is the same to the bit on one thread and on
+    /// two, whatever the plan, and an indefinite matrix is refused.
+    #[test]
+    fn factorises_as_faer_does_and_alike_on_any_number_of_threads() {
+        let (pattern, mut values) = grid(48, 7);
+        let on = |threads: usize, cholesky: &mut Cholesky, values: &[f64]| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| {
+                    cholesky
+                        .factorise(&pattern, values)
+                        .map(|_| cholesky.factor.clone())
+                })
+        };
+        // every subtree over 20 kflop a task of its own; then the default plan
+        for parallel_flops in [2e4, supernodal::PARALLEL_FLOPS] {
+            let mut cholesky = Cholesky::analyse_with(
+                &pattern,
+                SupernodalThreshold::FORCE_SUPERNODAL,
+                parallel_flops,
+            )
+            .unwrap();
+            let text = cholesky.supernodal.as_ref().unwrap().plan();
+            assert!(text.contains("Fork") && text.contains("Some("), "{text}");
+            let one = on(1, &mut cholesky, &values).unwrap();
+            let two = on(2, &mut cholesky, &values).unwrap();
+            let bits = |f: &[f64]| f.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&one), bits(&two));
+            let reference = faer_factor(&mut cholesky, &pattern, &values);
+            assert_close(&cholesky, &one, &reference);
+            let mut x: Vec<f64> = (0..pattern.size()).map(|i| (i % 7) as f64 - 3.0).collect();
+            let rhs = pattern.multiply(&values, &x);
+            let mut solved = rhs.clone();
+            cholesky.solve(&mut solved);
+            for (a, b) in solved.iter().zip(&mut x) {
+                assert!((a - *b).abs() < 1e-9, "{a} {b}");
+            }
+            // a negative pivot deep in the tree (the first unknown eliminated) and at its
+            // root (the last)
+            for place in [0, pattern.size() - 1] {
+                let unknown = pattern.unknown[place];
+                let at = pattern.place(unknown, unknown).unwrap();
+                let kept = values[at];
+                values[at] = -1.0;
+                for threads in [1, 2] {
+                    assert_eq!(
+                        on(threads, &mut cholesky, &values),
+                        Err(NotPositiveDefinite)
+                    );
+                }
+                values[at] = kept;
+            }
+        }
     }
 }

@@ -20,6 +20,7 @@
 pub mod assembly;
 pub mod contact_entry;
 pub mod linear;
+mod supernodal;
 
 use super::explicit::{elastic_energy, positive_setting, Observer, SolverError, State};
 use super::model::{Model, Motion};
