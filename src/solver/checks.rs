@@ -201,20 +201,13 @@ pub fn watched(
         inner: observer,
         watch: Watch::new(check, model.mesh.nodes.len()),
     };
-    let outcome = solve(&mut checked)
-        .map_err(|e| match e {
-            SolverError::Output { time, source } => match source.downcast::<CheckStop>() {
-                Ok(stop) => SolverError::Check(stop),
-                Err(source) => SolverError::Output { time, source },
-            },
-            other => other,
-        })
-        .and_then(
-            |state| match checked.watch.dynamic_once_loaded(state.step, state.time) {
-                Some(stop) => Err(SolverError::Check(stop)),
-                None => Ok(state),
-            },
-        );
+    let outcome = solve(&mut checked).map_err(|e| match e {
+        SolverError::Output { time, source } => match source.downcast::<CheckStop>() {
+            Ok(stop) => SolverError::Check(stop),
+            Err(source) => SolverError::Output { time, source },
+        },
+        other => other,
+    });
     let report = checked.watch.report(!model.tools.is_empty());
     (outcome, report)
 }
@@ -347,56 +340,6 @@ impl Watch {
         Ok(())
     }
 
-    /// The records loaded as the report counts them: after the settling time, with at least
-    /// [`LOADED_FRACTION`] of the final internal work.
-    fn loaded_records(&self) -> impl Iterator<Item = &(f64, Energies)> + Clone {
-        let final_work = self.records.last().map_or(0.0, |r| r.1.internal_work);
-        self.records.iter().filter(move |(t, e)| {
-            *t > self.settings.settle_time
-                && e.internal_work > 0.0
-                && e.internal_work >= LOADED_FRACTION * final_work
-        })
-    }
-
-    /// A finished run that was dynamic once loaded: [`KINETIC_STOP_RECORDS`] loaded records in
-    /// a row above [`KINETIC_STOP`]. The in-run stop waits for the internal work of
-    /// [`CheckSettings::loaded_work`], which a run whose sheet flies off the tools may never
-    /// put in; judged against the final work, its result carries the sheet's inertia all the
-    /// same, and finishing does not make it a forming.
-    fn dynamic_once_loaded(&mut self, step: usize, time: f64) -> Option<CheckStop> {
-        let (mut run, mut longest) = (0, 0);
-        let (mut high, mut worst): (f64, f64) = (0.0, 0.0);
-        for (_, e) in self.loaded_records() {
-            let ratio = kinetic_ratio(e);
-            (run, high) = if ratio > KINETIC_STOP {
-                (run + 1, high.max(ratio))
-            } else {
-                (0, 0.0)
-            };
-            if run >= KINETIC_STOP_RECORDS && run >= longest {
-                (longest, worst) = (run, worst.max(high));
-            }
-        }
-        if longest == 0 {
-            return None;
-        }
-        self.stop = Some(KINETIC);
-        Some(CheckStop {
-            check: KINETIC,
-            step,
-            time,
-            figure: format!(
-                "the run finished, but once {:.0} % of its final internal work was put in its \
-                 kinetic energy stayed above {:.0} % of the internal work for {longest} records \
-                 in a row (up to {:.0} %): the result is dynamic, not quasi-static",
-                100.0 * LOADED_FRACTION,
-                100.0 * KINETIC_STOP,
-                100.0 * worst
-            ),
-            advice: self.settings.dynamic_advice.into(),
-        })
-    }
-
     fn report(&self, tools: bool) -> CheckReport {
         let status = |name: &str, warn: bool| {
             if self.stop == Some(name) {
@@ -407,7 +350,12 @@ impl Watch {
                 CheckStatus::Ok
             }
         };
-        let loaded = self.loaded_records();
+        let final_work = self.records.last().map_or(0.0, |r| r.1.internal_work);
+        let loaded = self.records.iter().filter(|(t, e)| {
+            *t > self.settings.settle_time
+                && e.internal_work > 0.0
+                && e.internal_work >= LOADED_FRACTION * final_work
+        });
         let kinetic = loaded
             .clone()
             .map(|(_, e)| kinetic_ratio(e))
@@ -607,35 +555,6 @@ mod tests {
         assert_eq!(status(&report, KINETIC), CheckStatus::Warning);
         assert_eq!(report.warnings().count(), 1);
         assert_eq!(report.rows().len(), 5);
-    }
-
-    /// A run that finishes with its kinetic energy above half the internal work for
-    /// [`KINETIC_STOP_RECORDS`] loaded records in a row is stopped by the kinetic check, the
-    /// records before the load (a blank carried along) and a shorter burst (a contact impact)
-    /// are not.
-    #[test]
-    fn a_finished_run_that_stayed_dynamic_once_loaded_is_stopped() {
-        let mut records = vec![(0.05, 50.0, 1.0), (0.2, 30.0, 2.0)];
-        records.extend((0..4).map(|k| (0.3 + 0.1 * k as f64, 60.0, 100.0)));
-        records.push((0.8, 1.0, 100.0));
-        let mut burst = watch(&records);
-        assert!(burst.dynamic_once_loaded(9, 1.3).is_none());
-        records.push((0.9, 80.0, 100.0));
-        let mut still_short = watch(&records);
-        assert!(still_short.dynamic_once_loaded(9, 1.3).is_none());
-        records.extend((0..4).map(|k| (1.0 + 0.1 * k as f64, 70.0, 100.0)));
-        let mut dynamic = watch(&records);
-        let stop = dynamic.dynamic_once_loaded(9, 1.3).expect("a dynamic run");
-        assert_eq!(stop.check, KINETIC);
-        assert!(
-            stop.figure.contains("for 5 records in a row (up to 80 %)"),
-            "{}",
-            stop.figure
-        );
-        assert_eq!(
-            status(&dynamic.report(false), KINETIC),
-            CheckStatus::Stopped
-        );
     }
 
     #[test]
