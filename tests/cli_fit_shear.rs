@@ -301,19 +301,10 @@ fn virtual_bias_extension(dir: &Path, card: &str) -> PathBuf {
     results.join("bias-extension.csv")
 }
 
-/// `--refine-fe` as a user runs it: the virtual bias-extension test of the stiff-yarn fabric
-/// (c = 0.1, 0, 0.5 MPa; 50 x 150 mm on 12.5 mm cells) written by `thermostamp test`, fitted
-/// with the FE test in the loop on the same cells. The pin-jointed fit is several per cent off
-/// in `F_sh` (the FE central zone lags the net); the refined card is within 1 % up to 45°.
-#[test]
-fn refine_fe_fits_the_virtual_bias_extension_test() {
-    let dir = scratch_dir("fit-shear", "refine-fe");
-    let card = repo_path("tests/data/stiff-yarn-fabric.toml");
-    let card = card.to_str().unwrap();
-    let data = virtual_bias_extension(&dir, card);
-    let output = dir.join("refined.toml");
-    let plot = dir.join("refined.png");
-    let stdout = common::run_ok(&[
+/// `fit shear --refine-fe` of the virtual test's `data` (50 x 150 mm, up to 45°, on its
+/// 12.5 mm cells) from `card` into `output`, with `extra` options; its standard output.
+fn refine_fe(data: &Path, card: &str, output: &Path, extra: &[&str]) -> String {
+    let mut args = vec![
         "fit",
         "shear",
         "--data",
@@ -331,9 +322,35 @@ fn refine_fe_fits_the_virtual_bias_extension_test() {
         "--refine-fe",
         "--fe-element-size",
         "12.5",
-        "--plot",
-        plot.to_str().unwrap(),
-    ]);
+    ];
+    args.extend(extra);
+    common::run_ok(&args)
+}
+
+/// The first `n` coefficients of the analytic fit's table in `stdout`.
+fn printed_coefficients(stdout: &str, n: usize) -> Vec<f64> {
+    stdout
+        .lines()
+        .skip_while(|l| !l.contains("c_k (MPa)"))
+        .skip(1)
+        .take(n)
+        .map(|l| l.split_whitespace().nth(1).unwrap().parse().unwrap())
+        .collect()
+}
+
+/// `--refine-fe` as a user runs it: the virtual bias-extension test of the stiff-yarn fabric
+/// (c = 0.1, 0, 0.5 MPa; 50 x 150 mm on 12.5 mm cells) written by `thermostamp test`, fitted
+/// with the FE test in the loop on the same cells. The pin-jointed fit is several per cent off
+/// in `F_sh` (the FE central zone lags the net); the refined card is within 1 % up to 45°.
+#[test]
+fn refine_fe_fits_the_virtual_bias_extension_test() {
+    let dir = scratch_dir("fit-shear", "refine-fe");
+    let card = repo_path("tests/data/stiff-yarn-fabric.toml");
+    let card = card.to_str().unwrap();
+    let data = virtual_bias_extension(&dir, card);
+    let output = dir.join("refined.toml");
+    let plot = dir.join("refined.png");
+    let stdout = refine_fe(&data, card, &output, &["--plot", plot.to_str().unwrap()]);
     println!("{stdout}");
     assert!(stdout.contains("refined c_k"), "{stdout}");
     let truth = ShearInteraction::new(vec![0.1, 0.0, 0.5]);
@@ -341,13 +358,7 @@ fn refine_fe_fits_the_virtual_bias_extension_test() {
         |law: &ShearInteraction| common::shear_law_error(law, &truth, 0.3, (1..=9).map(|k| 5 * k));
     let refined = MaterialCard::load(&output).unwrap();
     let refined_error = error(&refined.fabric.shear);
-    let analytic: Vec<f64> = stdout
-        .lines()
-        .skip_while(|l| !l.contains("c_k (MPa)"))
-        .skip(1)
-        .take(3)
-        .map(|l| l.split_whitespace().nth(1).unwrap().parse().unwrap())
-        .collect();
+    let analytic = printed_coefficients(&stdout, 3);
     let analytic_error = error(&ShearInteraction::new(analytic));
     println!("F_sh off by {analytic_error:.4} (analytic), {refined_error:.4} (refined)");
     assert!(analytic_error > 0.02 && refined_error < 0.01);
@@ -398,29 +409,12 @@ fn refine_fe_keeps_and_fits_the_friction_term() {
     let card = card.to_str().unwrap();
     let data = virtual_bias_extension(&dir, card);
     let output = dir.join("refined.toml");
-    let stdout = common::run_ok(&[
-        "fit",
-        "shear",
-        "--data",
-        data.to_str().unwrap(),
-        "--width",
-        "50",
-        "--length",
-        "150",
-        "--card",
+    let stdout = refine_fe(
+        &data,
         card,
-        "--output",
-        output.to_str().unwrap(),
-        "--max-shear",
-        "45",
-        "--terms",
-        "friction,3",
-        "--friction-onset",
-        "3",
-        "--refine-fe",
-        "--fe-element-size",
-        "12.5",
-    ]);
+        &output,
+        &["--terms", "friction,3", "--friction-onset", "3"],
+    );
     println!("{stdout}");
     let truth = ShearInteraction::of(
         &[
@@ -433,13 +427,7 @@ fn refine_fe_keeps_and_fits_the_friction_term() {
     );
     let error =
         |law: &ShearInteraction| common::shear_law_error(law, &truth, 0.3, (1..=9).map(|k| 5 * k));
-    let analytic: Vec<f64> = stdout
-        .lines()
-        .skip_while(|l| !l.contains("c_k (MPa)"))
-        .skip(1)
-        .take(2)
-        .map(|l| l.split_whitespace().nth(1).unwrap().parse().unwrap())
-        .collect();
+    let analytic = printed_coefficients(&stdout, 2);
     let analytic_error = error(&ShearInteraction::of(&truth.shapes(), &analytic));
     let refined = MaterialCard::load(&output).unwrap();
     let (k0, onset) = refined
