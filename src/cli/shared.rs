@@ -221,13 +221,12 @@ pub fn print_checked_table(
 /// Increments, iterations, factorisations and the time split of an implicit run, one line.
 pub fn implicit_summary(s: &crate::solver::implicit::ImplicitStatistics) -> String {
     format!(
-        "implicit: {} increments ({} cut), {} Newton iterations ({} on the projected tangent, {} with an earlier factorisation), \
+        "implicit: {} increments ({} cut), {} Newton iterations ({} on the projected tangent), \
          {} factorisations; assembly {:.2} s, factorisation and solve {:.2} s",
         s.increments,
         s.cut_increments,
         s.iterations,
         s.projected,
-        s.chords,
         s.factorisations,
         s.assembly_seconds,
         s.solve_seconds

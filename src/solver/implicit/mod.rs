@@ -86,9 +86,6 @@ pub struct ImplicitStatistics {
     pub factorisations: usize,
     /// Iterations that needed the projected tangent.
     pub projected: usize,
-    /// Iterations whose step was solved with an earlier factorisation of the increment (a
-    /// chord step, docs/solver.md "Chord steps").
-    pub chords: usize,
     /// Wall-clock seconds in assembly (elements, patches, contact), factorisation and solve.
     pub assembly_seconds: f64,
     pub solve_seconds: f64,
@@ -538,8 +535,6 @@ fn newton(
     // the accepted line-search probe, the residual where the next iteration starts, with the
     // contact set it was evaluated on
     let mut carried: Option<(Evaluation, Option<Vec<Vec<bool>>>)> = None;
-    // whether the factorisation held is of an earlier iterate of this increment
-    let mut reusable = false;
     for iteration in 0..settings.max_iterations {
         stats.iterations += 1;
         let start = &IncrementStart {
@@ -633,27 +628,6 @@ fn newton(
             freezes += 1;
             frozen = Some(active_set(&evaluation));
         }
-        // an earlier factorisation of this increment tried first near the solution: its
-        // step is kept where it contracts the residual as Newton's would
-        if reusable && !stalls(&residuals) && norm <= CHORD_BAND * settings.tolerance * scale {
-            let chord = chord_step(
-                evaluator,
-                (&mut work.cholesky, &work.near),
-                start,
-                (&z, &x, &translations),
-                (&evaluation, frozen.as_deref()),
-                settings.tolerance * scale,
-                stats,
-            );
-            if let Some((candidate, cx, ct, probe)) = chord {
-                stats.chords += 1;
-                z = candidate;
-                x = cx;
-                translations = ct;
-                carried = Some((probe, frozen.clone()));
-                continue;
-            }
-        }
         let kind = if projected {
             Tangent::Projected
         } else {
@@ -688,7 +662,6 @@ fn newton(
             stats.factorisations += 1;
             shift *= 100.0;
         }
-        reusable = factored;
         if !factored {
             return Err(fail(
                 residuals,
@@ -696,7 +669,14 @@ fn newton(
                 "the tangent could not be factorised even when shifted".into(),
             ));
         }
-        let descent = || descent(layout, &evaluation.residual);
+        let descent = || -> Vec<f64> {
+            evaluation
+                .residual
+                .iter()
+                .zip(&layout.held)
+                .map(|(r, &held)| if held { 0.0 } else { -r })
+                .collect()
+        };
         let mut direction = descent();
         work.cholesky.solve(&mut direction);
         let correction = largest_free(layout, &direction);
@@ -724,7 +704,6 @@ fn newton(
                 .factorise(&layout.pattern, &work.values)
                 .is_err()
             {
-                reusable = false;
                 break;
             }
             anticipated.extend(entries);
@@ -753,7 +732,12 @@ fn newton(
         let slope = slope_along(layout, &direction, &evaluation.residual);
         // a force-driven tool moves at most a quarter of the contact's reach per step: its
         // potential -F u falls without bound once it has passed through the blank
-        let tool_step = tool_step(layout, &direction);
+        let tool_step = layout
+            .tool_unknown
+            .iter()
+            .flatten()
+            .map(|&u| direction[u].abs())
+            .fold(0.0, f64::max);
         let reach = 0.25 * model.contact.max_penetration;
         let mut alpha: f64 = if tool_step > reach {
             reach / tool_step
@@ -864,83 +848,6 @@ fn newton(
         reason: format!("no convergence in {} iterations", settings.max_iterations),
         residuals,
     })
-}
-
-/// How close to converged (a multiple of the tolerance) the residual must be before a step is
-/// tried with the increment's last factorisation instead of a new tangent: there a Newton
-/// step's tangent differs little from the last one, and a factorisation costs several
-/// residuals (docs/solver.md, "Chord steps").
-const CHORD_BAND: f64 = 10.0;
-
-/// The share of the residual a chord step must leave at most (or be converged) to be kept.
-const CHORD_CONTRACTION: f64 = 0.25;
-
-/// A kept chord step: the unknowns, positions and tool translations it reaches, and the
-/// residual there.
-type Chord = (Vec<f64>, Vec<Vector3<f64>>, Vec<Vector3<f64>>, Evaluation);
-
-/// The full step from `z` along `-K_old^{-1} r` (`r` the residual `evaluation`, on the contact
-/// set `engaged`), `K_old` the factorisation `cholesky` holds, kept
-/// when it lowers the incremental potential (where the potential decides, as in the line
-/// search) and leaves at most [`CHORD_CONTRACTION`] of the residual or a residual within
-/// `tolerance` (N); `None` otherwise, and then a new tangent is factorised.
-fn chord_step(
-    evaluator: &Evaluator,
-    (cholesky, near): (&mut Cholesky, &NearLists),
-    start: &IncrementStart,
-    (z, x, translations): (&[f64], &[Vector3<f64>], &[Vector3<f64>]),
-    (evaluation, engaged): (&Evaluation, Option<&[Vec<bool>]>),
-    tolerance: f64,
-    stats: &mut ImplicitStatistics,
-) -> Option<Chord> {
-    let layout = evaluator.layout;
-    let clock = Instant::now();
-    let mut direction = descent(layout, &evaluation.residual);
-    cholesky.solve(&mut direction);
-    stats.solve_seconds += clock.elapsed().as_secs_f64();
-    let slope = slope_along(layout, &direction, &evaluation.residual);
-    let reach = 0.25 * evaluator.model.contact.max_penetration;
-    if tool_step(layout, &direction) > reach || slope >= 0.0 {
-        return None;
-    }
-    let candidate: Vec<f64> = z.iter().zip(&direction).map(|(z, d)| z + d).collect();
-    let (cx, ct) = configuration(layout, &candidate, x, translations);
-    let trial = Trial {
-        positions: &cx,
-        translations: &ct,
-        engaged,
-        near: Some(near.lists()),
-    };
-    let clock = Instant::now();
-    let probe = evaluator.residual(start, &trial);
-    stats.assembly_seconds += clock.elapsed().as_secs_f64();
-    let probe = probe.ok()?;
-    let norm = free_norm(layout, &evaluation.residual);
-    let probe_norm = free_norm(layout, &probe.residual);
-    let contracts = probe_norm <= CHORD_CONTRACTION * norm || probe_norm <= tolerance;
-    let potential_decides =
-        -slope > POTENTIAL_ROUNDING * evaluation.potential.abs().max(f64::MIN_POSITIVE);
-    let lowers = !potential_decides || probe.potential <= evaluation.potential + 1e-4 * slope;
-    (probe_norm.is_finite() && contracts && lowers).then_some((candidate, cx, ct, probe))
-}
-
-/// The right-hand side of Newton's correction: minus the residual, zero where held.
-fn descent(layout: &Layout, residual: &[f64]) -> Vec<f64> {
-    residual
-        .iter()
-        .zip(&layout.held)
-        .map(|(r, &held)| if held { 0.0 } else { -r })
-        .collect()
-}
-
-/// The largest travel of a force-driven tool along `direction` (mm).
-fn tool_step(layout: &Layout, direction: &[f64]) -> f64 {
-    layout
-        .tool_unknown
-        .iter()
-        .flatten()
-        .map(|&u| direction[u].abs())
-        .fold(0.0, f64::max)
 }
 
 /// Times a correction is solved again with the contact springs it enters, at most.
