@@ -1,8 +1,9 @@
 //! The implicit solver's hot loops on the hemisphere pressed 10 mm into its tools
 //! (`examples/hemisphere.toml`): `cargo bench --bench implicit_assembly`.
 //!
-//! For 8 mm and 4 mm cells (400 and 1,600 quadrilaterals), on the threads rayon is given
-//! (`RAYON_NUM_THREADS`): one residual with the consistent tangent (laminate, hourglass,
+//! For 8 mm and 4 mm cells (400 and 1,600 quadrilaterals; other sizes in mm with
+//! `BENCH_CELLS`, e.g. `BENCH_CELLS=4,2.26` for the 5,041-cell benchmark mesh), on the threads
+//! rayon is given (`RAYON_NUM_THREADS`): one residual with the consistent tangent (laminate, hourglass,
 //! bending patches and contact, their tangents differenced where docs/solver.md says), one
 //! residual alone (what each line-search probe costs), and the sparse Cholesky
 //! factorisation and solve of that tangent. A plain timing loop, like the other benches; the
@@ -42,7 +43,8 @@ fn main() {
         "{:>6} {:>9} {:>16} {:>16} {:>16} {:>16}",
         "cell", "elements", "tangent (ms)", "residual (ms)", "factorise (ms)", "solve (ms)"
     );
-    for cell in ["8", "4"] {
+    let cells = std::env::var("BENCH_CELLS").unwrap_or_else(|_| "8,4".into());
+    for cell in cells.split(',').map(str::trim) {
         let overrides = [
             format!("blank.element_size={cell}"),
             "process.stroke=10".into(),

@@ -49,6 +49,18 @@ struct Update {
     mid: usize,
     /// Where the rows of `L_d` from `start` on lie in `L_s`'s block: `relative[at..]`.
     at: usize,
+    /// The runs of those rows that lie next to each other in `L_s`'s block too:
+    /// `runs[runs_at..runs_end]`.
+    runs_at: usize,
+    runs_end: usize,
+}
+
+/// Rows of an update, from its `first` on, that go to `length` consecutive rows of its
+/// supernode's block: subtracted as one slice, which the compiler vectorises.
+#[derive(Clone, Copy, Debug)]
+struct Run {
+    first: usize,
+    length: usize,
 }
 
 /// How a range of supernodes, places in the postorder of the tree, is factorised, fixed at
@@ -92,6 +104,7 @@ pub(super) struct Supernodal {
     updates: Vec<Update>,
     /// The rows of each update's block in its supernode's block (see [`Update::at`]).
     relative: Vec<usize>,
+    runs: Vec<Run>,
     /// Where each stored entry of the matrix lies in its supernode's block.
     scatter: Vec<usize>,
     /// The stored entries of supernode `s`'s columns: `matrix_ptr[s]..matrix_ptr[s + 1]`.
@@ -147,12 +160,15 @@ impl Supernodal {
                     start,
                     mid,
                     at: 0,
+                    runs_at: 0,
+                    runs_end: 0,
                 });
                 start += mid;
             }
         }
         let mut local = vec![usize::MAX; n];
         let (mut update_ptr, mut updates, mut relative) = (vec![0], Vec::new(), Vec::new());
+        let mut runs = Vec::new();
         let (mut scatter, mut matrix_ptr) = (vec![0; matrix.row_idx().len()], vec![]);
         let (col_ptr, row_idx) = (matrix.col_ptr(), matrix.row_idx());
         for s in 0..count {
@@ -168,6 +184,9 @@ impl Supernodal {
                     assert!(local[i] != usize::MAX, "an update outside its supernode");
                     local[i]
                 }));
+                update.runs_at = runs.len();
+                runs.extend(consecutive_runs(&relative[update.at..]));
+                update.runs_end = runs.len();
                 updates.push(update);
             }
             update_ptr.push(updates.len());
@@ -190,6 +209,7 @@ impl Supernodal {
             update_ptr,
             updates,
             relative,
+            runs,
             scatter,
             matrix_ptr,
             postorder: postorder(&parent),
@@ -401,8 +421,11 @@ impl Supernodal {
             let from = l_d.subrows(columns_d + update.start, rows_d - columns_d - update.start);
             let (mid, count) = (update.mid, from.nrows());
             let in_s = from.subrows(0, mid);
-            product.clear();
-            product.resize(count * mid, 0.0);
+            // every entry read below is written by the products: no zeroing
+            if product.len() < count * mid {
+                product.resize(count * mid, 0.0);
+            }
+            let product = &mut product[..count * mid];
             let mut w = MatMut::from_column_major_slice_mut(product, count, mid);
             let (w_top, w_bottom) = w.rb_mut().split_at_row_mut(mid);
             triangular::matmul(
@@ -425,11 +448,21 @@ impl Supernodal {
                 Par::Seq,
             );
             let relative = &self.relative[update.at..update.at + count];
+            let runs = &self.runs[update.runs_at..update.runs_end];
             for (c, &column) in relative[..mid].iter().enumerate() {
                 let target = &mut block[column * rows_s..(column + 1) * rows_s];
                 let source = &product[c * count..(c + 1) * count];
-                for r in c..count {
-                    target[relative[r]] -= source[r];
+                for run in runs {
+                    let end = run.first + run.length;
+                    if end <= c {
+                        continue;
+                    }
+                    let first = run.first.max(c);
+                    let at = relative[first];
+                    let target = &mut target[at..at + end - first];
+                    for (t, s) in target.iter_mut().zip(&source[first..end]) {
+                        *t -= s;
+                    }
                 }
             }
         }
@@ -452,6 +485,21 @@ impl Supernodal {
         solve_below(top.rb(), bottom, split);
         Ok(())
     }
+}
+
+/// The runs of consecutive values in `relative`, by their first index and length.
+fn consecutive_runs(relative: &[usize]) -> Vec<Run> {
+    let mut runs: Vec<Run> = Vec::new();
+    for (r, &at) in relative.iter().enumerate() {
+        match runs.last_mut() {
+            Some(run) if relative[run.first] + run.length == at => run.length += 1,
+            _ => runs.push(Run {
+                first: r,
+                length: 1,
+            }),
+        }
+    }
+    runs
 }
 
 /// Columns of a panel of the blocked dense Cholesky factorisation of a big diagonal block
@@ -670,6 +718,16 @@ impl<'a> Planner<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// An update's rows are cut into runs where their places in the supernode's block stop
+    /// being consecutive, and the runs cover every row once, in order.
+    #[test]
+    fn runs_split_where_the_rows_stop_being_consecutive() {
+        let runs = consecutive_runs(&[3, 4, 5, 9, 10, 2, 7]);
+        let cut: Vec<(usize, usize)> = runs.iter().map(|r| (r.first, r.length)).collect();
+        assert_eq!(cut, [(0, 3), (3, 2), (5, 1), (6, 1)]);
+        assert!(consecutive_runs(&[]).is_empty());
+    }
 
     /// The blocked dense factorisation of a supernode's block, in halves, agrees with faer's
     /// (in their lower triangles: faer's leaves rounding noise above the diagonal), on sizes
