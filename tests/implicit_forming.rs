@@ -238,3 +238,29 @@ fn a_run_that_fails_at_once_reports_why() {
     }
     assert_eq!(times.0, vec![0.0]);
 }
+
+/// The implicit run is the same to the last bit on one thread and on two: the factorisation's
+/// subtrees and the assembly's two halves of the matrix are split where the matrix's structure
+/// says, never by the thread count, so every sum comes in the same order (docs/solver.md,
+/// "Implicit").
+#[test]
+fn the_implicit_hemisphere_is_the_same_on_one_thread_and_on_two() {
+    let overrides = [
+        "blank.element_size=6".to_string(),
+        "process.stroke=8".into(),
+        "output.history_points=8".into(),
+    ];
+    let positions = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let (_, run) = pool.install(|| common::form("examples/hemisphere.toml", &overrides));
+        let state = run.outcome.expect("the run reaches the end of its stroke");
+        assert!(run.implicit.expect("an implicit run").iterations > 0);
+        state.positions
+    };
+    let (one, two) = (positions(1), positions(2));
+    let moved = one.iter().zip(&two).filter(|(a, b)| a != b).count();
+    assert_eq!(moved, 0, "{moved} nodes differ between one thread and two");
+}

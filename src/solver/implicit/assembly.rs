@@ -48,6 +48,9 @@ pub struct Layout {
     patches: Vec<Scatter>,
     /// Where each node's own 3x3 block is stored (contact, drag).
     diagonal: Vec<Scatter>,
+    /// The first stored place of the column at which the stored entries are halved: the
+    /// element and patch blocks are added to the two halves side by side.
+    halfway: usize,
 }
 
 impl Layout {
@@ -109,6 +112,7 @@ impl Layout {
         let patches = patch_nodes.iter().map(scatter).collect();
         let diagonal = (0..nodes).map(|n| scatter(&vec![n])).collect();
         let tool_drag = 1e-9 * penalty.iter().sum::<f64>();
+        let halfway = pattern.halfway();
         Self {
             nodes,
             size,
@@ -124,7 +128,27 @@ impl Layout {
             elements,
             patches,
             diagonal,
+            halfway,
         }
+    }
+
+    /// Adds `block(blocks[i], a, b)` of every group `groups[i]` to the tangent `values`, the
+    /// stored places before [`Self::halfway`] on one thread and the others on another: each
+    /// place takes its sums in the groups' order whichever thread runs it.
+    fn add_side_by_side<T: Sync>(
+        &self,
+        groups: &[Scatter],
+        blocks: &[T],
+        values: &mut [f64],
+        block: impl Fn(&T, usize, usize) -> Matrix3<f64> + Sync,
+    ) {
+        let (low, high) = values.split_at_mut(self.halfway);
+        let add = |part: &mut [f64], offset: usize| {
+            for (group, k) in groups.iter().zip(blocks) {
+                group.add_within(&self.held, part, offset, |a, b| block(k, a, b));
+            }
+        };
+        rayon::join(|| add(low, 0), || add(high, self.halfway));
     }
 
     /// Adds to the tangent `values` the Hessian `hessian` of a potential of node `n` relative
@@ -469,7 +493,7 @@ impl Evaluator<'_> {
         values.resize(layout.pattern.entries(), 0.0);
         let values = values.as_mut_slice();
         for (c, chunk) in model.elements.chunks(CHUNK).enumerate() {
-            let blocks: Vec<Result<ElementBlocks, (usize, MaterialError)>> = chunk
+            let blocks = chunk
                 .par_iter()
                 .enumerate()
                 .map(|(i, _)| {
@@ -478,11 +502,11 @@ impl Evaluator<'_> {
                     self.element_stiffness(k, start, trial.positions, at, kind)
                         .map_err(|e| (k, e))
                 })
-                .collect();
-            for (i, k) in blocks.into_iter().enumerate() {
-                let k = k?;
-                layout.elements[c * CHUNK + i].add(&layout.held, values, |a, b| k[a][b]);
-            }
+                .collect::<Vec<Result<ElementBlocks, _>>>()
+                .into_iter()
+                .collect::<Result<Vec<_>, _>>()?;
+            let groups = &layout.elements[c * CHUNK..];
+            layout.add_side_by_side(groups, &blocks, values, |k, a, b| k[a][b]);
         }
         if let Some(bending) = &model.bending {
             for (c, chunk) in bending.patches.chunks(CHUNK).enumerate() {
@@ -490,11 +514,10 @@ impl Evaluator<'_> {
                     .par_iter()
                     .map(|patch| bending.stiffness(patch, trial.positions, exact))
                     .collect();
-                for (i, k) in blocks.into_iter().enumerate() {
-                    layout.patches[c * CHUNK + i].add(&layout.held, values, |a, b| {
-                        k.fixed_view::<3, 3>(3 * a, 3 * b).into_owned()
-                    });
-                }
+                let groups = &layout.patches[c * CHUNK..];
+                layout.add_side_by_side(groups, &blocks, values, |k, a, b| {
+                    k.fixed_view::<3, 3>(3 * a, 3 * b).into_owned()
+                });
             }
         }
         self.contact_tangent(start, trial, evaluation, kind, values);
@@ -777,23 +800,40 @@ impl Scatter {
     /// Adds `block(a, b)`, the 3x3 block of local nodes `(a, b)`, for every pair of the
     /// group, skipping held rows and columns.
     fn add(&self, held: &[bool], values: &mut [f64], block: impl Fn(usize, usize) -> Matrix3<f64>) {
+        self.add_within(held, values, 0, block);
+    }
+
+    /// [`Self::add`] to the places `offset..offset + part.len()` only, `part` holding them
+    /// (a column's run of places lies within one such range where it starts a column).
+    fn add_within(
+        &self,
+        held: &[bool],
+        part: &mut [f64],
+        offset: usize,
+        block: impl Fn(usize, usize) -> Matrix3<f64>,
+    ) {
+        let within = offset..offset + part.len();
         let mut places = self.places.iter();
         for (a, (&na, &ra)) in self.nodes.iter().zip(&self.rank).enumerate() {
             for (b, (&nb, &rb)) in self.nodes.iter().zip(&self.rank).enumerate() {
                 if ra < rb {
                     continue;
                 }
+                let columns = [(); 3].map(|_| *places.next().expect("a place per column"));
+                if !columns.iter().any(|&p| within.contains(&(p as usize))) {
+                    continue;
+                }
                 let k = block(a, b);
-                for e in 0..3 {
-                    let start = *places.next().expect("a place per column");
-                    if start == Self::SKIP {
+                for (e, &start) in columns.iter().enumerate() {
+                    if !within.contains(&(start as usize)) {
                         continue;
                     }
+                    let start = start as usize - offset;
                     let first = if na == nb { e } else { 0 };
                     for d in first..3 {
                         // a node's three unknowns are stored one after the other
                         if !held[3 * na + d] {
-                            values[start as usize + (d - first)] += k[(d, e)];
+                            part[start + (d - first)] += k[(d, e)];
                         }
                     }
                 }

@@ -104,6 +104,16 @@ impl Pattern {
         stored.binary_search(&row).ok().map(|k| start + k)
     }
 
+    /// The first stored place of the column before which half the stored entries lie: the
+    /// values split there into two parts, each holding whole columns.
+    pub fn halfway(&self) -> usize {
+        let col_ptr = self.symbolic.col_ptr();
+        let half = self.entries() / 2;
+        col_ptr[col_ptr
+            .partition_point(|&p| p < half)
+            .min(col_ptr.len() - 1)]
+    }
+
     /// `y = K x` for the symmetric matrix whose lower triangle is stored in `values`.
     pub fn multiply(&self, values: &[f64], x: &[f64]) -> Vec<f64> {
         let mut y = vec![0.0; x.len()];
