@@ -857,8 +857,11 @@ const ANTICIPATION_ROUNDS: usize = 3;
 const FRICTION_PASSES: usize = 2;
 
 /// How close to converged (a multiple of the tolerance) the residual must be before friction
-/// is lagged again with the normal forces reached.
-const LAG_REFRESH_BAND: f64 = 10.0;
+/// is lagged again with the normal forces reached: close enough that they are the increment's
+/// to within the lag's own change threshold, early enough that the iterations still to come
+/// converge the new problem (docs/solver.md, "Friction": 10 took an iteration more about every
+/// third increment, 1,000 more iterations again).
+const LAG_REFRESH_BAND: f64 = 100.0;
 
 /// Change of the friction limits `mu lambda`, relative to their sum, above which friction is
 /// lagged again with them and Newton's method goes on from there on the new problem.
