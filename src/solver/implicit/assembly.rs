@@ -48,9 +48,6 @@ pub struct Layout {
     patches: Vec<Scatter>,
     /// Where each node's own 3x3 block is stored (contact, drag).
     diagonal: Vec<Scatter>,
-    /// The first stored place of the column at which the stored entries are halved: the
-    /// element and patch blocks are added to the two halves side by side.
-    halfway: usize,
 }
 
 impl Layout {
@@ -112,7 +109,6 @@ impl Layout {
         let patches = patch_nodes.iter().map(scatter).collect();
         let diagonal = (0..nodes).map(|n| scatter(&vec![n])).collect();
         let tool_drag = 1e-9 * penalty.iter().sum::<f64>();
-        let halfway = pattern.halfway();
         Self {
             nodes,
             size,
@@ -128,12 +124,11 @@ impl Layout {
             elements,
             patches,
             diagonal,
-            halfway,
         }
     }
 
     /// Adds `block(blocks[i], a, b)` of every group `groups[i]` to the tangent `values`, the
-    /// stored places before [`Self::halfway`] on one thread and the others on another: each
+    /// stored places before [`Pattern::halfway`] on one thread and the others on another: each
     /// place takes its sums in the groups' order whichever thread runs it.
     fn add_side_by_side<T: Sync>(
         &self,
@@ -142,13 +137,14 @@ impl Layout {
         values: &mut [f64],
         block: impl Fn(&T, usize, usize) -> Matrix3<f64> + Sync,
     ) {
-        let (low, high) = values.split_at_mut(self.halfway);
+        let halfway = self.pattern.halfway();
+        let (low, high) = values.split_at_mut(halfway);
         let add = |part: &mut [f64], offset: usize| {
             for (group, k) in groups.iter().zip(blocks) {
                 group.add_within(&self.held, part, offset, |a, b| block(k, a, b));
             }
         };
-        rayon::join(|| add(low, 0), || add(high, self.halfway));
+        rayon::join(|| add(low, 0), || add(high, halfway));
     }
 
     /// Adds to the tangent `values` the Hessian `hessian` of a potential of node `n` relative
@@ -502,6 +498,8 @@ impl Evaluator<'_> {
                     self.element_stiffness(k, start, trial.positions, at, kind)
                         .map_err(|e| (k, e))
                 })
+                // collected in order first: the error named is the first element's on any
+                // thread count
                 .collect::<Vec<Result<ElementBlocks, _>>>()
                 .into_iter()
                 .collect::<Result<Vec<_>, _>>()?;
@@ -819,6 +817,7 @@ impl Scatter {
                 if ra < rb {
                     continue;
                 }
+                // a held column's SKIP lies beyond every stored place, so within no part
                 let columns = [(); 3].map(|_| *places.next().expect("a place per column"));
                 if !columns.iter().any(|&p| within.contains(&(p as usize))) {
                     continue;
