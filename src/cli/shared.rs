@@ -222,12 +222,15 @@ pub fn print_checked_table(
 pub fn implicit_summary(s: &crate::solver::implicit::ImplicitStatistics) -> String {
     format!(
         "implicit: {} increments ({} cut), {} Newton iterations ({} on the projected tangent), \
-         {} factorisations; assembly {:.2} s, factorisation and solve {:.2} s",
+         {} factorisations and {} of the preconditioner, {} CG iterations; assembly {:.2} s, \
+         factorisation and solve {:.2} s",
         s.increments,
         s.cut_increments,
         s.iterations,
         s.projected,
         s.factorisations,
+        s.preconditioner_factorisations,
+        s.cg_iterations,
         s.assembly_seconds,
         s.solve_seconds
     )

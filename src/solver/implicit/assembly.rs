@@ -6,7 +6,7 @@
 //! Elements and patches are evaluated in parallel in chunks of fixed size and their entries
 //! added in element order, so the sums do not depend on the thread count.
 
-use super::linear::{minimum_degree, nested_dissection, Pattern};
+use super::linear::{minimum_degree, nested_dissection, Pattern, Sparsified};
 use crate::contact::potential::{pair_contact, FrictionLag, PairContact, PairHessian, PairOptions};
 use crate::contact::Projection;
 use crate::contact::{NearTriangles, NodeContact, ToolLoad, ToolMotion};
@@ -43,6 +43,10 @@ pub struct Layout {
     /// The mean element size (mm), the scale of a Newton correction at the rounding of the
     /// positions; set by the solver.
     pub length_scale: f64,
+    /// The tangent on the membrane's stencil, the bending patches' farther couplings moved
+    /// onto the diagonal: the preconditioner of the linear solve (docs/solver.md, "Linear
+    /// solve"); `None` without bending, where the stencils are the same.
+    pub preconditioner: Option<Sparsified>,
     /// Where each element's and each bending patch's entries are stored.
     elements: Vec<Scatter>,
     patches: Vec<Scatter>,
@@ -104,6 +108,17 @@ impl Layout {
         }
         let order = elimination_order(model, nodes, &element_nodes, &patch_nodes, size);
         let pattern = Pattern::from_groups_in_order(size, groups.iter().map(|g| &g[..]), order);
+        let preconditioner = (!patch_nodes.is_empty()).then(|| {
+            let (elements, rest) = groups.split_at(element_nodes.len());
+            let tools = &rest[patch_nodes.len()..];
+            let order = elimination_order(model, nodes, &element_nodes, &[], size);
+            let membrane = Pattern::from_groups_in_order(
+                size,
+                elements.iter().chain(tools).map(|g| &g[..]),
+                order,
+            );
+            Sparsified::new(&pattern, membrane)
+        });
         let scatter = |nodes: &Vec<usize>| Scatter::new(&pattern, &held, nodes);
         let elements = element_nodes.iter().map(scatter).collect();
         let patches = patch_nodes.iter().map(scatter).collect();
@@ -116,6 +131,7 @@ impl Layout {
             tool_unknown,
             tool_force,
             pattern,
+            preconditioner,
             penalty,
             drag,
             tool_drag,

@@ -131,6 +131,18 @@ impl Pattern {
         y
     }
 
+    /// The unknowns `(i, j)` of the entry at each stored place, in the places' order.
+    pub fn stored_pairs(&self) -> Vec<(usize, usize)> {
+        let (col_ptr, row_idx) = (self.symbolic.col_ptr(), self.symbolic.row_idx());
+        let mut pairs = Vec::with_capacity(row_idx.len());
+        for pj in 0..self.size() {
+            for &pi in &row_idx[col_ptr[pj]..col_ptr[pj + 1]] {
+                pairs.push((self.unknown[pi], self.unknown[pj]));
+            }
+        }
+        pairs
+    }
+
     /// Entries of the Cholesky factor of a matrix of this pattern, fill-in included.
     pub fn factor_entries(&self) -> Result<usize, String> {
         Ok(symbolic_factorisation(self, SupernodalThreshold::AUTO)?.len_val())
@@ -393,6 +405,104 @@ impl Cholesky {
     }
 }
 
+/// A sparser pattern that a matrix's entries are moved onto (docs/solver.md, "Linear solve"):
+/// an entry the sparser pattern holds is kept, a coupling `a_ij` it does not hold is dropped
+/// and `|a_ij|` added to both diagonals `a_ii` and `a_jj`. What was added is
+/// `|a| (e_i e_i^T + e_j e_j^T) - a (e_i e_j^T + e_j e_i^T)`, positive semi-definite, so the
+/// sparser matrix is at least the full one: positive definite where that is, and its
+/// factorisation a preconditioner whose `M^-1 K` has its eigenvalues in `(0, 1]`.
+pub struct Sparsified {
+    pub pattern: Pattern,
+    /// Per stored place of the full pattern: its place in the sparser one, or the places of
+    /// the two diagonals a dropped coupling goes to.
+    places: Vec<Result<usize, (usize, usize)>>,
+}
+
+impl Sparsified {
+    /// `full`'s entries onto `sparse`, which holds every diagonal entry.
+    pub fn new(full: &Pattern, sparse: Pattern) -> Self {
+        let diagonal = |i: usize| sparse.place(i, i).expect("a diagonal entry");
+        let places = full
+            .stored_pairs()
+            .into_iter()
+            .map(|(i, j)| sparse.place(i, j).ok_or_else(|| (diagonal(i), diagonal(j))))
+            .collect();
+        Self {
+            pattern: sparse,
+            places,
+        }
+    }
+
+    /// The sparser matrix's values (its lower triangle) from the full one's, `values`.
+    pub fn values(&self, values: &[f64], into: &mut Vec<f64>) {
+        into.clear();
+        into.resize(self.pattern.entries(), 0.0);
+        for (v, place) in values.iter().zip(&self.places) {
+            match *place {
+                Ok(p) => into[p] += v,
+                Err((a, b)) => {
+                    into[a] += v.abs();
+                    into[b] += v.abs();
+                }
+            }
+        }
+    }
+}
+
+/// Why conjugate gradients gave no solution.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NotSolved {
+    /// `p^T K p <= 0` along a search direction: `K` is not positive definite.
+    NotPositiveDefinite,
+    /// The residual was not within the tolerance after the iterations allowed.
+    Slow,
+}
+
+impl Cholesky {
+    /// Solves `K x = rhs`, `K` the matrix with lower triangle `values` on `pattern`, by
+    /// conjugate gradients preconditioned with this factorisation (of an approximation of
+    /// `K`, e.g. a [`Sparsified`] one), from `x = 0` until `|K x - rhs| <= tolerance |rhs|`,
+    /// within `max_iterations`: the solution and the iterations it took, or why not and after
+    /// how many. Every sum runs in a fixed order: the same bits on any number of threads.
+    pub fn conjugate_gradients(
+        &mut self,
+        pattern: &Pattern,
+        values: &[f64],
+        rhs: &[f64],
+        tolerance: f64,
+        max_iterations: usize,
+    ) -> Result<(Vec<f64>, usize), (NotSolved, usize)> {
+        let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(a, b)| a * b).sum::<f64>();
+        let target = tolerance * dot(rhs, rhs).sqrt();
+        let mut x = vec![0.0; rhs.len()];
+        let mut r = rhs.to_vec();
+        let mut z = r.clone();
+        self.solve(&mut z);
+        let mut p = z.clone();
+        let mut rz = dot(&r, &z);
+        for iteration in 1..=max_iterations {
+            let q = pattern.multiply(values, &p);
+            let curvature = dot(&p, &q);
+            if curvature <= 0.0 || !curvature.is_finite() {
+                return Err((NotSolved::NotPositiveDefinite, iteration));
+            }
+            let alpha = rz / curvature;
+            x.iter_mut().zip(&p).for_each(|(x, p)| *x += alpha * p);
+            r.iter_mut().zip(&q).for_each(|(r, q)| *r -= alpha * q);
+            if dot(&r, &r).sqrt() <= target {
+                return Ok((x, iteration));
+            }
+            z.copy_from_slice(&r);
+            self.solve(&mut z);
+            let next = dot(&r, &z);
+            let beta = next / rz;
+            rz = next;
+            p.iter_mut().zip(&z).for_each(|(p, z)| *p = z + beta * *p);
+        }
+        Err((NotSolved::Slow, max_iterations))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -473,6 +583,156 @@ mod tests {
             .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
         assert_eq!(a.len(), b.len());
         assert!(error <= 1e-12 * scale, "{error:e} of {scale:e}");
+    }
+
+    /// The out-of-plane stiffness of a `side` x `side` plate of unit cells, one unknown (the
+    /// deflection) per node: a tension `t` between the nodes of each cell, the bending of a
+    /// patch of 3 x 3 nodes around each inner node (its second differences along both axes
+    /// and its twist, `B = 1`), and a ground spring `g` per node. The cells' pattern and the
+    /// full one (with the patches), the full matrix's values, in their natural order.
+    fn plate(side: usize, t: f64, g: f64) -> (Pattern, Pattern, Vec<f64>) {
+        let node = |i: usize, j: usize| i * side + j;
+        let cells: Vec<Vec<usize>> = (0..side - 1)
+            .flat_map(|i| {
+                (0..side - 1).map(move |j| {
+                    vec![
+                        node(i, j),
+                        node(i + 1, j),
+                        node(i, j + 1),
+                        node(i + 1, j + 1),
+                    ]
+                })
+            })
+            .collect();
+        let patches: Vec<Vec<usize>> = (1..side - 1)
+            .flat_map(|i| {
+                (1..side - 1)
+                    .map(move |j| (0..9).map(|k| node(i + k / 3 - 1, j + k % 3 - 1)).collect())
+            })
+            .collect();
+        let n = side * side;
+        let narrow = Pattern::from_groups(n, cells.iter().map(|c| &c[..]));
+        let full = Pattern::from_groups(n, cells.iter().chain(&patches).map(|c| &c[..]));
+        let mut values = vec![0.0; full.entries()];
+        let mut add = |nodes: &[usize], c: &[f64], scale: f64| {
+            for (a, ca) in nodes.iter().zip(c) {
+                for (b, cb) in nodes.iter().zip(c) {
+                    if a >= b {
+                        values[full.place(*a, *b).unwrap()] += scale * ca * cb;
+                    }
+                }
+            }
+        };
+        for cell in &cells {
+            for (a, b) in [(0, 1), (0, 2), (1, 3), (2, 3)] {
+                add(&[cell[a], cell[b]], &[1.0, -1.0], t);
+            }
+        }
+        for patch in &patches {
+            // the 3 x 3 patch, row by row: w_xx, w_yy and the twist
+            add(&[patch[3], patch[4], patch[5]], &[1.0, -2.0, 1.0], 1.0);
+            add(&[patch[1], patch[4], patch[7]], &[1.0, -2.0, 1.0], 1.0);
+            add(
+                &[patch[0], patch[2], patch[6], patch[8]],
+                &[0.5, -0.5, -0.5, 0.5],
+                2.0,
+            );
+        }
+        for a in 0..n {
+            add(&[a], &[1.0], g);
+        }
+        (narrow, full, values)
+    }
+
+    /// The plate's matrix moved onto the cells' stencil keeps every entry that stencil holds
+    /// and lies above the full matrix (`x^T (K_s - K) x >= 0`, here for the deflections of
+    /// single nodes, of pairs and of random fields), so that it factorises.
+    #[test]
+    fn a_sparsified_plate_keeps_its_stencil_and_lies_above_the_full_one() {
+        let (narrow, full, values) = plate(7, 0.01, 1e-3);
+        let sparsified = Sparsified::new(&full, narrow.clone());
+        let mut sparse = Vec::new();
+        sparsified.values(&values, &mut sparse);
+        let n = full.size();
+        for i in 0..n {
+            for j in 0..=i {
+                if let (Some(p), Some(q)) = (narrow.place(i, j), full.place(i, j)) {
+                    if i != j {
+                        assert_eq!(sparse[p], values[q], "({i}, {j})");
+                    }
+                }
+            }
+        }
+        let mut state = 7u64;
+        let mut random = move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(a, b)| a * b).sum::<f64>();
+        let mut fields: Vec<Vec<f64>> = (0..20)
+            .map(|_| (0..n).map(|_| random()).collect())
+            .collect();
+        fields.push((0..n).map(|k| if k == 24 { 1.0 } else { 0.0 }).collect());
+        fields.push((0..n).map(|k| [8, 10].contains(&k) as u8 as f64).collect());
+        for x in &fields {
+            let above = dot(x, &narrow.multiply(&sparse, x)) - dot(x, &full.multiply(&values, x));
+            assert!(above >= -1e-12 * dot(x, x), "{above:e}");
+        }
+        let mut cholesky = Cholesky::analyse(&narrow).unwrap();
+        cholesky.factorise(&narrow, &sparse).unwrap();
+    }
+
+    /// Conjugate gradients on the full plate, preconditioned with the factorisation on the
+    /// cells' stencil, reach the direct solution; with the factorisation of the full matrix
+    /// itself, in one iteration; and they stop where the matrix is not positive definite.
+    #[test]
+    fn conjugate_gradients_preconditioned_on_the_narrow_stencil_solve_the_plate() {
+        let (narrow, full, values) = plate(12, 0.01, 1e-3);
+        let n = full.size();
+        let load: Vec<f64> = (0..n).map(|k| ((k * 7) % 5) as f64 - 2.0).collect();
+        let mut direct = Cholesky::analyse(&full).unwrap();
+        direct.factorise(&full, &values).unwrap();
+        let mut exact = load.clone();
+        direct.solve(&mut exact);
+        let sparsified = Sparsified::new(&full, narrow);
+        let mut sparse = Vec::new();
+        sparsified.values(&values, &mut sparse);
+        let mut preconditioner = Cholesky::analyse(&sparsified.pattern).unwrap();
+        preconditioner
+            .factorise(&sparsified.pattern, &sparse)
+            .unwrap();
+        let (x, iterations) = preconditioner
+            .conjugate_gradients(&full, &values, &load, 1e-12, n)
+            .unwrap();
+        let scale = exact.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let error = x
+            .iter()
+            .zip(&exact)
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        assert!(error <= 1e-9 * scale, "{error:e} of {scale:e}");
+        // the preconditioner misses the bending's farther couplings: more than one iteration,
+        // far fewer than the unknowns
+        assert!(iterations > 1 && iterations < n / 2, "{iterations} of {n}");
+        let (y, once) = direct
+            .conjugate_gradients(&full, &values, &load, 1e-10, n)
+            .unwrap();
+        assert_eq!(once, 1);
+        assert!(y
+            .iter()
+            .zip(&exact)
+            .all(|(a, b)| (a - b).abs() <= 1e-9 * scale));
+        // a negative stiffness where the load pushes: the first search direction finds it
+        let mut indefinite = values.clone();
+        let centre = full.place(66, 66).unwrap();
+        indefinite[centre] -= 1e3;
+        let point: Vec<f64> = (0..n).map(|k| (k == 66) as u8 as f64).collect();
+        let stopped = direct.conjugate_gradients(&full, &indefinite, &point, 1e-10, n);
+        assert_eq!(
+            stopped.map(|_| ()),
+            Err((NotSolved::NotPositiveDefinite, 1))
+        );
     }
 
     /// A `side` x `side` grid whose nodes are coupled within two steps (the patches of 3 x 3

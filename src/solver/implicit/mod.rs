@@ -27,7 +27,7 @@ use super::model::{Model, Motion};
 use crate::contact::potential::{penalty_stiffness, FrictionLag};
 use crate::contact::{RigidTool, ToolMotion};
 use assembly::{Evaluation, Evaluator, IncrementStart, Layout, NearLists, Tangent, Trial};
-use linear::Cholesky;
+use linear::{Cholesky, Sparsified};
 use nalgebra::{Matrix2, Vector3};
 use std::time::Instant;
 
@@ -58,6 +58,11 @@ pub struct ImplicitSettings {
     /// hemisphere (measured with a 1e-4 slack band) the run then stalls at 9.4 mm of stroke
     /// where, exact, it reaches 25.3 mm (docs/solver.md).
     pub exact_tangent: bool,
+    /// Entries of the tangent's factor from which the linear solves are made by conjugate
+    /// gradients preconditioned on the membrane's stencil, where the model has bending
+    /// patches (docs/solver.md, "Conjugate gradients on the membrane's stencil"): 0 always,
+    /// `usize::MAX` never.
+    pub iterative_from: usize,
 }
 
 impl ImplicitSettings {
@@ -73,6 +78,7 @@ impl ImplicitSettings {
             friction_slip_rate: 0.1,
             penalty_scale: 0.1,
             exact_tangent: true,
+            iterative_from: ITERATIVE_FACTOR_ENTRIES,
         }
     }
 }
@@ -83,7 +89,11 @@ pub struct ImplicitStatistics {
     pub increments: usize,
     pub cut_increments: usize,
     pub iterations: usize,
+    /// Factorisations of the tangent, and of its preconditioner on the membrane's stencil.
     pub factorisations: usize,
+    pub preconditioner_factorisations: usize,
+    /// Conjugate-gradient iterations of the linear solves.
+    pub cg_iterations: usize,
     /// Iterations that needed the projected tangent.
     pub projected: usize,
     /// Wall-clock seconds in assembly (elements, patches, contact), factorisation and solve.
@@ -101,12 +111,44 @@ struct Converged {
 }
 
 /// What Newton's method keeps from one iteration and increment to the next: the
-/// factorisation on the run's pattern and the lists of the tools' triangles near each node.
+/// factorisations on the run's pattern and on its preconditioner's, and the lists of the
+/// tools' triangles near each node.
 struct Workspace {
     cholesky: Cholesky,
     near: NearLists,
     /// The tangent's values, a buffer reused by every iteration.
     values: Vec<f64>,
+    /// The preconditioner's factorisation and values, where the layout has one.
+    preconditioner: Option<(Cholesky, Vec<f64>)>,
+}
+
+/// Solves `K d = rhs` for the tangent `K` in `values` by conjugate gradients preconditioned
+/// with its factorisation on the membrane's stencil (docs/solver.md, "Conjugate gradients on
+/// the membrane's stencil"), with
+/// the `preconditioner`'s factorisation and buffer; `None` where the layout has no
+/// preconditioner, it is not positive definite, or the iterations do not converge within
+/// [`CG_ITERATIONS`]: then the tangent is factorised.
+fn iterative_solve(
+    layout: &Layout,
+    preconditioner: &mut Option<(Cholesky, Vec<f64>)>,
+    values: &[f64],
+    rhs: &[f64],
+    stats: &mut ImplicitStatistics,
+) -> Option<Vec<f64>> {
+    let sparsified = layout.preconditioner.as_ref()?;
+    let (cholesky, sparse_values) = preconditioner.as_mut()?;
+    sparsified.values(values, sparse_values);
+    stats.preconditioner_factorisations += 1;
+    cholesky
+        .factorise(&sparsified.pattern, sparse_values)
+        .ok()?;
+    let solved =
+        cholesky.conjugate_gradients(&layout.pattern, values, rhs, CG_TOLERANCE, CG_ITERATIONS);
+    let iterations = match &solved {
+        Ok((_, iterations)) | Err((_, iterations)) => *iterations,
+    };
+    stats.cg_iterations += iterations;
+    solved.ok().map(|(d, _)| d)
 }
 
 /// Why an increment failed.
@@ -126,10 +168,19 @@ pub fn run(
 ) -> Result<State, SolverError> {
     check_settings(settings)?;
     let layout = layout(model, settings)?;
+    let cholesky = Cholesky::analyse(&layout.pattern).map_err(SolverError::Settings)?;
+    let preconditioner = match iterative(&layout, &cholesky, settings.iterative_from) {
+        Some(p) => Some((
+            Cholesky::analyse(&p.pattern).map_err(SolverError::Settings)?,
+            Vec::new(),
+        )),
+        None => None,
+    };
     let mut work = Workspace {
-        cholesky: Cholesky::analyse(&layout.pattern).map_err(SolverError::Settings)?,
+        cholesky,
         near: NearLists::default(),
         values: Vec::new(),
+        preconditioner,
     };
     let evaluator = Evaluator {
         model,
@@ -329,17 +380,38 @@ pub fn layout(model: &Model, settings: &ImplicitSettings) -> Result<Layout, Solv
     Ok(layout)
 }
 
+/// Entries of the tangent's factor from which its linear solves are made by conjugate
+/// gradients on the membrane's stencil rather than by factorising it **(choice, measured**
+/// on the hemisphere, 2 threads: 400 cells, 3.0e5 entries, 2.4 s with against 1.7 s without;
+/// 1,600 cells, 1.8e6 entries, 7.0 s against 8.6 s; 5,041 cells, 7.5e6, 38.5 s against 58.8 s):
+/// below, the factor fits in the caches and a factorisation costs about what the iterations do.
+const ITERATIVE_FACTOR_ENTRIES: usize = 1_000_000;
+
+/// The preconditioner of the layout's linear solves, where they are made iteratively: where
+/// it has one and the tangent's factor, `cholesky`'s, has `from` entries or more.
+fn iterative<'a>(layout: &'a Layout, cholesky: &Cholesky, from: usize) -> Option<&'a Sparsified> {
+    layout
+        .preconditioner
+        .as_ref()
+        .filter(|_| cholesky.factor_entries() >= from)
+}
+
 /// Bytes per stored entry of the sparse tangent and of its factor: a value and a row index.
 const SPARSE_ENTRY_BYTES: f64 = 16.0;
 
 /// The memory (bytes) the sparse tangent of `model` and its Cholesky factor take, fill-in
-/// included, on the pattern and elimination order the run will use: what an implicit run needs
-/// beyond the arrays of the model and its state.
+/// included, on the pattern and elimination order the run will use, with the preconditioner's
+/// where the run uses one: what an implicit run needs beyond the arrays of the model and its
+/// state.
 pub fn sparse_memory(model: &Model) -> Result<f64, String> {
     let n = model.mesh.nodes.len();
     let layout = Layout::new(model, vec![0.0; n], vec![0.0; n]);
-    let factor = Cholesky::analyse(&layout.pattern)?.factor_entries();
-    Ok(SPARSE_ENTRY_BYTES * (layout.pattern.entries() + factor) as f64)
+    let cholesky = Cholesky::analyse(&layout.pattern)?;
+    let mut entries = layout.pattern.entries() + cholesky.factor_entries();
+    if let Some(p) = iterative(&layout, &cholesky, ITERATIVE_FACTOR_ENTRIES) {
+        entries += p.pattern.entries() + Cholesky::analyse(&p.pattern)?.factor_entries();
+    }
+    Ok(SPARSE_ENTRY_BYTES * entries as f64)
 }
 
 /// The smallest force scale of the convergence test, as a fraction of `G t0 h` (the force that
@@ -633,7 +705,16 @@ fn newton(
         } else {
             Tangent::Consistent
         };
+        let descent = || -> Vec<f64> {
+            evaluation
+                .residual
+                .iter()
+                .zip(&layout.held)
+                .map(|(r, &held)| if held { 0.0 } else { -r })
+                .collect()
+        };
         let mut factored = false;
+        let mut iterated = None;
         for kind in [kind, Tangent::Projected] {
             let clock = Instant::now();
             evaluator
@@ -641,6 +722,18 @@ fn newton(
                 .map_err(|(k, e)| fail(residuals.clone(), None, format!("element {k}: {e}")))?;
             stats.assembly_seconds += clock.elapsed().as_secs_f64();
             let clock = Instant::now();
+            iterated = iterative_solve(
+                layout,
+                &mut work.preconditioner,
+                &work.values,
+                &descent(),
+                stats,
+            );
+            if iterated.is_some() {
+                stats.solve_seconds += clock.elapsed().as_secs_f64();
+                factored = true;
+                break;
+            }
             factored = work
                 .cholesky
                 .factorise(&layout.pattern, &work.values)
@@ -669,16 +762,11 @@ fn newton(
                 "the tangent could not be factorised even when shifted".into(),
             ));
         }
-        let descent = || -> Vec<f64> {
-            evaluation
-                .residual
-                .iter()
-                .zip(&layout.held)
-                .map(|(r, &held)| if held { 0.0 } else { -r })
-                .collect()
-        };
-        let mut direction = descent();
-        work.cholesky.solve(&mut direction);
+        let mut direction = iterated.unwrap_or_else(|| {
+            let mut direct = descent();
+            work.cholesky.solve(&mut direct);
+            direct
+        });
         let correction = largest_free(layout, &direction);
         // the springs the correction enters, anticipated in the linear model (kept where the
         // correction still descends)
@@ -698,19 +786,32 @@ fn newton(
                 break;
             }
             contact_entry::add_springs(layout, &entries, &mut work.values);
-            stats.factorisations += 1;
-            if work
-                .cholesky
-                .factorise(&layout.pattern, &work.values)
-                .is_err()
-            {
-                break;
-            }
             anticipated.extend(entries);
+            let mut pushed = descent();
+            contact_entry::add_pushes(layout, &anticipated, &mut pushed);
+            let solved = match iterative_solve(
+                layout,
+                &mut work.preconditioner,
+                &work.values,
+                &pushed,
+                stats,
+            ) {
+                Some(solved) => solved,
+                None => {
+                    stats.factorisations += 1;
+                    if work
+                        .cholesky
+                        .factorise(&layout.pattern, &work.values)
+                        .is_err()
+                    {
+                        break;
+                    }
+                    work.cholesky.solve(&mut pushed);
+                    pushed
+                }
+            };
             newton_direction.get_or_insert_with(|| direction.clone());
-            direction = descent();
-            contact_entry::add_pushes(layout, &anticipated, &mut direction);
-            work.cholesky.solve(&mut direction);
+            direction = solved;
         }
         if let Some(newton) = newton_direction {
             if slope_along(layout, &direction, &evaluation.residual) >= 0.0 {
@@ -852,6 +953,18 @@ fn newton(
 
 /// Times a correction is solved again with the contact springs it enters, at most.
 const ANTICIPATION_ROUNDS: usize = 3;
+
+/// Relative residual `|K d + r| / |r|` to which conjugate gradients solve for a Newton
+/// correction **(choice)**: Newton's method contracts only four to eight times per iteration
+/// until near the solution (the yarns' slack band), which a correction this close does not
+/// slow (on the 5,041-cell hemisphere 551 iterations against 562 with exact solves; docs/
+/// performance.md).
+const CG_TOLERANCE: f64 = 1e-2;
+
+/// Conjugate-gradient iterations after which the tangent is factorised instead (measured on
+/// the 5,041-cell hemisphere: about four a solve on average, 2,408 over 576 solves, growing
+/// with the number of cells across the part; a few solves a run do not converge within this).
+const CG_ITERATIONS: usize = 40;
 
 /// Times an increment's friction is lagged again with the normal forces it reaches, at most.
 const FRICTION_PASSES: usize = 2;
