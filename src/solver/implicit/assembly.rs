@@ -43,10 +43,6 @@ pub struct Layout {
     /// The mean element size (mm), the scale of a Newton correction at the rounding of the
     /// positions; set by the solver.
     pub length_scale: f64,
-    /// The tangent on the membrane's stencil, the bending patches' farther couplings moved
-    /// onto the diagonal: the preconditioner of the linear solve (docs/solver.md, "Linear
-    /// solve"); `None` without bending, where the stencils are the same.
-    pub preconditioner: Option<Sparsified>,
     /// Where each element's and each bending patch's entries are stored.
     elements: Vec<Scatter>,
     patches: Vec<Scatter>,
@@ -85,40 +81,14 @@ impl Layout {
                 }
             }
         }
-        let dofs = |nodes: &[usize]| -> Vec<usize> {
-            nodes
-                .iter()
-                .flat_map(|&n| [3 * n, 3 * n + 1, 3 * n + 2])
-                .collect()
-        };
         let element_nodes: Vec<Vec<usize>> =
             model.elements.iter().map(|e| e.nodes().to_vec()).collect();
         let patch_nodes: Vec<Vec<usize>> = model.bending.as_ref().map_or(Vec::new(), |b| {
             b.patches.iter().map(|p| p.nodes.clone()).collect()
         });
-        let mut groups: Vec<Vec<usize>> = element_nodes
-            .iter()
-            .chain(&patch_nodes)
-            .map(|n| dofs(n))
-            .collect();
-        for unknown in tool_unknown.iter().flatten() {
-            for n in 0..nodes {
-                groups.push(vec![3 * n, 3 * n + 1, 3 * n + 2, *unknown]);
-            }
-        }
+        let groups = unknown_groups(nodes, &[&element_nodes, &patch_nodes], &tool_unknown);
         let order = elimination_order(model, nodes, &element_nodes, &patch_nodes, size);
         let pattern = Pattern::from_groups_in_order(size, groups.iter().map(|g| &g[..]), order);
-        let preconditioner = (!patch_nodes.is_empty()).then(|| {
-            let (elements, rest) = groups.split_at(element_nodes.len());
-            let tools = &rest[patch_nodes.len()..];
-            let order = elimination_order(model, nodes, &element_nodes, &[], size);
-            let membrane = Pattern::from_groups_in_order(
-                size,
-                elements.iter().chain(tools).map(|g| &g[..]),
-                order,
-            );
-            Sparsified::new(&pattern, membrane)
-        });
         let scatter = |nodes: &Vec<usize>| Scatter::new(&pattern, &held, nodes);
         let elements = element_nodes.iter().map(scatter).collect();
         let patches = patch_nodes.iter().map(scatter).collect();
@@ -131,7 +101,6 @@ impl Layout {
             tool_unknown,
             tool_force,
             pattern,
-            preconditioner,
             penalty,
             drag,
             tool_drag,
@@ -141,6 +110,23 @@ impl Layout {
             patches,
             diagonal,
         }
+    }
+
+    /// The tangent on the membrane's stencil of `model` (this layout's), the bending patches'
+    /// farther couplings moved onto the diagonal: the preconditioner of the linear solves
+    /// (docs/solver.md, "Conjugate gradients on the membrane's stencil"); `None` without
+    /// bending patches, where the stencils are the same.
+    pub fn membrane_preconditioner(&self, model: &Model) -> Option<Sparsified> {
+        if self.patches.is_empty() {
+            return None;
+        }
+        let element_nodes: Vec<Vec<usize>> =
+            model.elements.iter().map(|e| e.nodes().to_vec()).collect();
+        let groups = unknown_groups(self.nodes, &[&element_nodes], &self.tool_unknown);
+        let order = elimination_order(model, self.nodes, &element_nodes, &[], self.size);
+        let membrane =
+            Pattern::from_groups_in_order(self.size, groups.iter().map(|g| &g[..]), order);
+        Some(Sparsified::new(&self.pattern, membrane))
     }
 
     /// Adds `block(blocks[i], a, b)` of every group `groups[i]` to the tangent `values`, the
@@ -184,6 +170,28 @@ impl Layout {
             values[self.pattern.place(u, u).expect("tool diagonal")] += axis.dot(&(hessian * axis));
         }
     }
+}
+
+/// The unknowns coupled with one another in the tangent: those of the nodes of each set of
+/// each of `sets` (elements, bending patches), then each force-driven tool's travel with the
+/// unknowns of every node.
+fn unknown_groups(
+    nodes: usize,
+    sets: &[&[Vec<usize>]],
+    tool_unknown: &[Option<usize>],
+) -> Vec<Vec<usize>> {
+    let dofs = |set: &Vec<usize>| -> Vec<usize> {
+        set.iter()
+            .flat_map(|&n| [3 * n, 3 * n + 1, 3 * n + 2])
+            .collect()
+    };
+    let mut groups: Vec<Vec<usize>> = sets.iter().flat_map(|s| s.iter().map(dofs)).collect();
+    for unknown in tool_unknown.iter().flatten() {
+        for n in 0..nodes {
+            groups.push(vec![3 * n, 3 * n + 1, 3 * n + 2, *unknown]);
+        }
+    }
+    groups
 }
 
 /// The order in which the factorisation eliminates the unknowns: node by node (a node's

@@ -118,32 +118,63 @@ struct Workspace {
     near: NearLists,
     /// The tangent's values, a buffer reused by every iteration.
     values: Vec<f64>,
-    /// The preconditioner's factorisation and values, where the layout has one.
-    preconditioner: Option<(Cholesky, Vec<f64>)>,
+    /// Where the linear solves are iterative, their preconditioner.
+    preconditioner: Option<Preconditioner>,
 }
 
-/// Solves `K d = rhs` for the tangent `K` in `values` by conjugate gradients preconditioned
-/// with its factorisation on the membrane's stencil (docs/solver.md, "Conjugate gradients on
-/// the membrane's stencil"), with
-/// the `preconditioner`'s factorisation and buffer; `None` where the layout has no
-/// preconditioner, it is not positive definite, or the iterations do not converge within
+/// The tangent on the membrane's stencil: where its entries come from, its factorisation and
+/// a buffer for its values.
+struct Preconditioner {
+    sparsified: Sparsified,
+    cholesky: Cholesky,
+    values: Vec<f64>,
+}
+
+impl Preconditioner {
+    /// The preconditioner of `layout`'s linear solves, where they are made iteratively: where
+    /// `model` has bending patches and the tangent's factor, `cholesky`'s, has `from` entries
+    /// or more.
+    fn of(
+        model: &Model,
+        layout: &Layout,
+        cholesky: &Cholesky,
+        from: usize,
+    ) -> Result<Option<Self>, String> {
+        if cholesky.factor_entries() < from {
+            return Ok(None);
+        }
+        let Some(sparsified) = layout.membrane_preconditioner(model) else {
+            return Ok(None);
+        };
+        Ok(Some(Self {
+            cholesky: Cholesky::analyse(&sparsified.pattern)?,
+            sparsified,
+            values: Vec::new(),
+        }))
+    }
+}
+
+/// Solves `K d = rhs` for the tangent `K` in `values` (on `layout`'s pattern) by conjugate
+/// gradients preconditioned with its factorisation on the membrane's stencil (docs/solver.md,
+/// "Conjugate gradients on the membrane's stencil"); `None` where there is no
+/// `preconditioner`, it is not positive definite, or the iterations do not converge within
 /// [`CG_ITERATIONS`]: then the tangent is factorised.
 fn iterative_solve(
     layout: &Layout,
-    preconditioner: &mut Option<(Cholesky, Vec<f64>)>,
+    preconditioner: Option<&mut Preconditioner>,
     values: &[f64],
     rhs: &[f64],
     stats: &mut ImplicitStatistics,
 ) -> Option<Vec<f64>> {
-    let sparsified = layout.preconditioner.as_ref()?;
-    let (cholesky, sparse_values) = preconditioner.as_mut()?;
-    sparsified.values(values, sparse_values);
+    let p = preconditioner?;
+    p.sparsified.values(values, &mut p.values);
     stats.preconditioner_factorisations += 1;
-    cholesky
-        .factorise(&sparsified.pattern, sparse_values)
+    p.cholesky
+        .factorise(&p.sparsified.pattern, &p.values)
         .ok()?;
     let solved =
-        cholesky.conjugate_gradients(&layout.pattern, values, rhs, CG_TOLERANCE, CG_ITERATIONS);
+        p.cholesky
+            .conjugate_gradients(&layout.pattern, values, rhs, CG_TOLERANCE, CG_ITERATIONS);
     let iterations = match &solved {
         Ok((_, iterations)) | Err((_, iterations)) => *iterations,
     };
@@ -169,13 +200,8 @@ pub fn run(
     check_settings(settings)?;
     let layout = layout(model, settings)?;
     let cholesky = Cholesky::analyse(&layout.pattern).map_err(SolverError::Settings)?;
-    let preconditioner = match iterative(&layout, &cholesky, settings.iterative_from) {
-        Some(p) => Some((
-            Cholesky::analyse(&p.pattern).map_err(SolverError::Settings)?,
-            Vec::new(),
-        )),
-        None => None,
-    };
+    let preconditioner = Preconditioner::of(model, &layout, &cholesky, settings.iterative_from)
+        .map_err(SolverError::Settings)?;
     let mut work = Workspace {
         cholesky,
         near: NearLists::default(),
@@ -387,15 +413,6 @@ pub fn layout(model: &Model, settings: &ImplicitSettings) -> Result<Layout, Solv
 /// below, the factor fits in the caches and a factorisation costs about what the iterations do.
 const ITERATIVE_FACTOR_ENTRIES: usize = 1_000_000;
 
-/// The preconditioner of the layout's linear solves, where they are made iteratively: where
-/// it has one and the tangent's factor, `cholesky`'s, has `from` entries or more.
-fn iterative<'a>(layout: &'a Layout, cholesky: &Cholesky, from: usize) -> Option<&'a Sparsified> {
-    layout
-        .preconditioner
-        .as_ref()
-        .filter(|_| cholesky.factor_entries() >= from)
-}
-
 /// Bytes per stored entry of the sparse tangent and of its factor: a value and a row index.
 const SPARSE_ENTRY_BYTES: f64 = 16.0;
 
@@ -408,8 +425,8 @@ pub fn sparse_memory(model: &Model) -> Result<f64, String> {
     let layout = Layout::new(model, vec![0.0; n], vec![0.0; n]);
     let cholesky = Cholesky::analyse(&layout.pattern)?;
     let mut entries = layout.pattern.entries() + cholesky.factor_entries();
-    if let Some(p) = iterative(&layout, &cholesky, ITERATIVE_FACTOR_ENTRIES) {
-        entries += p.pattern.entries() + Cholesky::analyse(&p.pattern)?.factor_entries();
+    if let Some(p) = Preconditioner::of(model, &layout, &cholesky, ITERATIVE_FACTOR_ENTRIES)? {
+        entries += p.sparsified.pattern.entries() + p.cholesky.factor_entries();
     }
     Ok(SPARSE_ENTRY_BYTES * entries as f64)
 }
@@ -724,7 +741,7 @@ fn newton(
             let clock = Instant::now();
             iterated = iterative_solve(
                 layout,
-                &mut work.preconditioner,
+                work.preconditioner.as_mut(),
                 &work.values,
                 &descent(),
                 stats,
@@ -791,7 +808,7 @@ fn newton(
             contact_entry::add_pushes(layout, &anticipated, &mut pushed);
             let solved = match iterative_solve(
                 layout,
-                &mut work.preconditioner,
+                work.preconditioner.as_mut(),
                 &work.values,
                 &pushed,
                 stats,
