@@ -5,106 +5,9 @@
 
 mod common;
 
-use common::{repo_path, scratch_dir, thermostamp};
-use std::path::{Path, PathBuf};
-use std::time::{Duration, Instant};
-
-/// One adversarial invocation.
-struct Case {
-    name: String,
-    args: Vec<String>,
-    code: i32,
-    /// Pieces the message must contain (file, line, key or option).
-    names: Vec<String>,
-}
-
-/// The fixtures every case draws on, in one scratch folder.
-struct Fixtures {
-    dir: PathBuf,
-    /// The hemisphere example with the card's path made absolute.
-    scenario: String,
-    card: String,
-}
-
-impl Fixtures {
-    fn new() -> Self {
-        let dir = scratch_dir("adversarial", "fixtures");
-        let materials = repo_path("materials");
-        let scenario = std::fs::read_to_string(repo_path("tests/data/hemisphere-explicit.toml"))
-            .unwrap()
-            .replace("../../materials/", &format!("{}/", materials.display()));
-        let card = std::fs::read_to_string(repo_path("materials/t300-5hs-pps.toml")).unwrap();
-        Self {
-            dir,
-            scenario,
-            card,
-        }
-    }
-
-    /// Writes `text` to `name` in the scratch folder and returns its path.
-    fn file(&self, name: &str, text: &[u8]) -> String {
-        let path = self.dir.join(name);
-        std::fs::write(&path, text).unwrap();
-        path.display().to_string()
-    }
-
-    /// The example scenario with `from` replaced by `to` (which must occur), written to `name`.
-    fn scenario(&self, name: &str, from: &str, to: &str) -> String {
-        assert!(
-            self.scenario.contains(from),
-            "{name}: '{from}' not in the example"
-        );
-        self.file(
-            &format!("{name}.toml"),
-            self.scenario.replace(from, to).as_bytes(),
-        )
-    }
-
-    /// The T300/PPS card with `from` replaced by `to` (which must occur), written to `name`.
-    fn card(&self, name: &str, from: &str, to: &str) -> String {
-        assert!(self.card.contains(from), "{name}: '{from}' not in the card");
-        self.file(
-            &format!("{name}.toml"),
-            self.card.replace(from, to).as_bytes(),
-        )
-    }
-
-    /// The example scenario on the card file `card`.
-    fn scenario_on_card(&self, name: &str, card: &str) -> String {
-        let shipped = format!("{}", repo_path("materials/t300-5hs-pps.toml").display());
-        self.scenario(name, &shipped, card)
-    }
-
-    /// The example scenario with its blank read from the mesh file `mesh`.
-    fn file_blank(&self, name: &str, mesh: &str) -> String {
-        let rectangle = ["width =", "length =", "element_size =", "pattern ="];
-        let text: String = self
-            .scenario
-            .lines()
-            .filter(|l| !rectangle.iter().any(|key| l.starts_with(key)))
-            .map(|l| format!("{l}\n"))
-            .collect::<String>()
-            .replace("[blank]\n", &format!("[blank]\nmesh = \"{mesh}\"\n"));
-        self.file(&format!("{name}.toml"), text.as_bytes())
-    }
-
-    fn output(&self, name: &str) -> String {
-        self.dir.join("out").join(name).display().to_string()
-    }
-}
-
-fn case(name: &str, args: &[&str], code: i32, names: &[&str]) -> Case {
-    Case {
-        name: name.into(),
-        args: args.iter().map(|s| s.to_string()).collect(),
-        code,
-        names: names.iter().map(|s| s.to_string()).collect(),
-    }
-}
-
-fn repo(relative: &str) -> String {
-    repo_path(relative).display().to_string()
-}
+use common::adversarial::{args, case, check, repo, Case, Fixtures};
+use common::thermostamp;
+use std::path::Path;
 
 /// Usage errors that clap finds, before any file is read.
 fn usage_cases(f: &Fixtures) -> Vec<Case> {
@@ -1055,66 +958,6 @@ fn fit_cases(f: &Fixtures) -> Vec<Case> {
         .collect()
 }
 
-fn args(list: &[&str]) -> Vec<String> {
-    list.iter().map(|s| s.to_string()).collect()
-}
-
-/// Longest a refused invocation may take: it is refused before any step.
-const REFUSAL_TIME: Duration = Duration::from_secs(30);
-
-fn check(case: &Case) -> Result<(), String> {
-    let args: Vec<&str> = case.args.iter().map(String::as_str).collect();
-    let start = Instant::now();
-    let out = thermostamp(&args);
-    let elapsed = start.elapsed();
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    let code = out.status.code();
-    let mut problems = Vec::new();
-    if code != Some(case.code) {
-        problems.push(format!("exit code {code:?}, expected {}", case.code));
-    }
-    if code == Some(101) || stderr.contains("panicked") {
-        problems.push("panicked".into());
-    }
-    for piece in &case.names {
-        if !stderr.contains(piece.as_str()) {
-            problems.push(format!("'{piece}' not named"));
-        }
-    }
-    let errors: Vec<&str> = stderr.lines().filter(|l| l.starts_with("error")).collect();
-    if case.code == 2 && !case.args.is_empty() && errors.len() != 1 {
-        problems.push(format!("{} error lines", errors.len()));
-    }
-    if stderr.chars().filter(char::is_ascii_digit).count() > 0 && has_long_number(&stderr) {
-        problems.push("a number printed with too many digits".into());
-    }
-    if elapsed > REFUSAL_TIME {
-        problems.push(format!("took {elapsed:?}"));
-    }
-    if problems.is_empty() {
-        Ok(())
-    } else {
-        Err(format!(
-            "{}: {}\n    {}",
-            case.name,
-            problems.join(", "),
-            stderr.trim()
-        ))
-    }
-}
-
-/// A run of more than 20 digits (a float printed in full).
-fn has_long_number(text: &str) -> bool {
-    let mut run = 0;
-    for c in text.chars() {
-        run = if c.is_ascii_digit() { run + 1 } else { 0 };
-        if run > 20 {
-            return true;
-        }
-    }
-    false
-}
-
 fn all_cases(f: &Fixtures) -> Vec<Case> {
     let mut cases = usage_cases(f);
     cases.extend(material_point_cases(f));
@@ -1126,7 +969,7 @@ fn all_cases(f: &Fixtures) -> Vec<Case> {
 
 #[test]
 fn every_bad_input_is_refused_with_exit_2_naming_its_source() {
-    let fixtures = Fixtures::new();
+    let fixtures = Fixtures::new("fixtures");
     let cases = all_cases(&fixtures);
     assert!(cases.len() >= 60, "only {} cases", cases.len());
     let failures: Vec<String> = cases.iter().filter_map(|c| check(c).err()).collect();
@@ -1141,7 +984,7 @@ fn every_bad_input_is_refused_with_exit_2_naming_its_source() {
 
 #[test]
 fn refused_runs_write_no_output_folder() {
-    let fixtures = Fixtures::new();
+    let fixtures = Fixtures::new("fixtures");
     let out = fixtures.output("refused-run");
     let _ = std::fs::remove_dir_all(&out);
     let scenario = fixtures.scenario("refused-hot", "temperature = 300.0", "temperature = 400.0");

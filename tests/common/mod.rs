@@ -1,6 +1,8 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
+pub mod adversarial;
+
 use nalgebra::{Matrix3, Rotation3, Vector3};
 use proptest::prelude::*;
 use std::path::PathBuf;
