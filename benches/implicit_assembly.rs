@@ -66,7 +66,7 @@ fn main() {
             model,
             layout: &layout,
             exact: settings.exact_tangent,
-            slip_rate: settings.friction_slip_rate,
+            stick_slip: implicit::stick_slip(model, &settings),
         };
         let strains: Vec<Matrix2<f64>> = model
             .elements

@@ -121,6 +121,7 @@ fn forming_tangent_equals_differences_of_the_residual() {
                         limit: 0.5,
                         normal: Vector3::z(),
                         start: model.mesh.nodes[a] - Vector3::new(0.001 * a as f64, 0.0, 0.0),
+                        carried: Vector3::new(0.1, -0.2, 0.05) * (a % 5) as f64,
                     })
                 })
                 .collect()

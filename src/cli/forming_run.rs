@@ -44,11 +44,11 @@ fn forming(args: &Args) -> anyhow::Result<()> {
         history: Some(history(CsvStream::create(&csv, &COLUMNS)?)),
         frames: match scenario.output.frames {
             0 => None,
-            n => Some(FrameOutput {
-                series: PvdSeries::new(&dir, SERIES)?,
-                every: (scenario.output.history_points / n).max(1),
-                time_scaling: scenario.process.time_scaling,
-            }),
+            n => Some(FrameOutput::new(
+                PvdSeries::new(&dir, SERIES)?,
+                (n, forming.settings.end_time),
+                scenario.process.time_scaling,
+            )),
         },
     };
     match forming.solver {

@@ -349,7 +349,6 @@ fn sheet_test<T: SheetTest>(
         c,
         (names, &estimate, &chosen),
         shape,
-        p.history_points,
         columns,
         |output, bar| {
             let output = LiveOutput {
@@ -456,7 +455,6 @@ fn run_and_report(
     c: &CommonArgs,
     ((label, name), estimate, chosen): ((&str, &str), &RunEstimate, &[String]),
     (end_time, time_scaling): (f64, f64),
-    history_points: usize,
     columns: [&str; 3],
     run: impl FnOnce(OpenOutput, &mut dyn Progress) -> Result<(TestRun, TestReport), String>,
 ) -> anyhow::Result<()> {
@@ -469,7 +467,7 @@ fn run_and_report(
         .collect();
     let output = OpenOutput {
         csv: Some(CsvStream::create(&csv, &header)?),
-        frames: frame_output(&c.output, name, (c.frames, history_points), time_scaling)?,
+        frames: frame_output(&c.output, name, (c.frames, end_time), time_scaling)?,
     };
     let wrote_frames = output.frames.is_some();
     let stop = interrupt_flag()?;
@@ -507,22 +505,22 @@ fn products(name: &str) -> ProductFiles {
 /// The plots of the tests: `<name>-<suffix>.png`.
 const PLOT_SUFFIXES: [&str; 2] = ["force", "shear-angle"];
 
-/// `frames` frames of `records` records, at process times (the run's times times
-/// `time_scaling`).
+/// `frames` frames over a run of `end_time` simulated seconds, at process times (the run's
+/// times times `time_scaling`).
 fn frame_output(
     dir: &Path,
     name: &str,
-    (frames, records): (usize, usize),
+    (frames, end_time): (usize, f64),
     time_scaling: f64,
 ) -> anyhow::Result<Option<FrameOutput>> {
     if frames == 0 {
         return Ok(None);
     }
-    Ok(Some(FrameOutput {
-        series: PvdSeries::new(dir, name)?,
-        every: (records / frames).max(1),
+    Ok(Some(FrameOutput::new(
+        PvdSeries::new(dir, name)?,
+        (frames, end_time),
         time_scaling,
-    }))
+    )))
 }
 
 /// What a finished test hands to the writer besides its records (which give the time,

@@ -6,12 +6,19 @@
 //!   as in [`super::penalty`]), so the tool pushes with `-k (g - g_m) n`. The spring is that of the explicit solver without its mass:
 //!   `k = s m / dt^2` with `dt = h / c` is `s E t0 A / h^2` for a node of area `A` on elements of
 //!   size `h` and wave modulus `E` ([`penalty_stiffness`]).
-//! - **Friction**: regularised Coulomb with the normal force `lambda` and the tangent plane
-//!   (normal `n0`) of the start of the increment, as incremental-potential contact lags them:
-//!   `D(s) = mu lambda (sqrt(|s|^2 + eps^2) - eps)` of the slip `s = P0 (y - y0)` since the
-//!   increment started (`P0 = I - n0 n0^T`, `y` the node relative to the tool). Past a slip of a
-//!   few `eps` it is `mu lambda` against the slip, exactly Coulomb's sliding force; below, a
-//!   stiff elastic stick of `mu lambda / eps`.
+//! - **Friction**: Coulomb's law with an elastic stick, as the explicit solver has it
+//!   ([`super::penalty`]), written as a potential of the slip with the normal force `lambda`
+//!   and the tangent plane (normal `n0`) of the start of the increment lagged, as
+//!   incremental-potential contact lags them. The tangential force `q` carried from the last
+//!   increment (minus the friction force on the node) plus the stick's `k s`, with
+//!   `s = P0 (y - y0)` the slip since the increment started (`P0 = I - n0 n0^T`, `y` the node
+//!   relative to the tool) and `k = mu lambda / eps`, is the trial `z = P0 (q + k s)`; the
+//!   force is its return to Coulomb's disc, `P(z) = z` within `|z| <= mu lambda` (stick) and
+//!   `mu lambda z / |z|` beyond (slip). `P` is the gradient of the convex
+//!   `phi(z) = |z|^2 / 2k` (stick), `(mu lambda |z| - (mu lambda)^2 / 2) / k` (slip)
+//!   (docs/solver.md, "Friction"). The force depends on the path of slip, not on how it is cut
+//!   into increments nor on how fast it is run: a node sliding steadily carries exactly
+//!   `mu lambda`, whatever the punch speed and the increment.
 
 use super::penalty::ContactSettings;
 use super::rigid_tool::RigidTool;
@@ -27,6 +34,9 @@ pub struct FrictionLag {
     pub normal: Vector3<f64>,
     /// The node's position relative to the tool at the start (mm).
     pub start: Vector3<f64>,
+    /// The tangential force carried from the last increment (N): minus the friction force on
+    /// the node there, the stick's memory.
+    pub carried: Vector3<f64>,
 }
 
 /// A node's contact with one tool at a trial position: the gradient and Hessian of its
@@ -56,10 +66,11 @@ pub fn penalty_stiffness(scale: f64, wave_stiffness: f64, area: f64, size: f64) 
     scale * wave_stiffness * area / (size * size)
 }
 
-/// How a pair's contact is evaluated: the regularising slip of friction (mm), which Hessian,
-/// and whether Newton's method has frozen the pair's spring on or off.
+/// How a pair's contact is evaluated: the elastic slip of friction's stick (mm), which
+/// Hessian, and whether Newton's method has frozen the pair's spring on or off.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PairOptions {
+    /// `eps`: the slip at which a node starting from rest reaches Coulomb's limit.
     pub slip: f64,
     pub hessian: PairHessian,
     /// `Some(true)` holds the spring on even where the node has left the margin (then it
@@ -118,21 +129,59 @@ pub fn pair_contact(
         };
     }
     if let Some(f) = rub {
-        let projector = Matrix3::identity() - f.normal * f.normal.transpose();
-        let s = projector * (y - f.start);
-        let rho = (s.norm_squared() + slip * slip).sqrt();
-        pair.energy += f.limit * (rho - slip);
-        let g = s * (f.limit / rho);
-        pair.gradient += g;
-        pair.tangential = -g;
-        if hessian != PairHessian::None {
-            pair.hessian += projector
-                * (Matrix3::identity() / rho - s * s.transpose() / (rho * rho * rho))
-                * projector
-                * f.limit;
-        }
+        let friction = stick_slip(f, y, slip, hessian != PairHessian::None);
+        pair.energy += friction.energy;
+        pair.gradient += friction.gradient;
+        pair.tangential = -friction.gradient;
+        pair.hessian += friction.hessian;
     }
     Some(pair)
+}
+
+/// The friction part of a pair's potential: energy (N·mm, zero where the increment starts),
+/// gradient (N) and Hessian (N/mm).
+struct FrictionPart {
+    energy: f64,
+    gradient: Vector3<f64>,
+    hessian: Matrix3<f64>,
+}
+
+/// Coulomb's friction with an elastic stick of slip `eps` at `y` (module docs): the trial
+/// force `z = P0 (q + k s)` returned to the disc of radius `mu lambda`. Its Hessian is `k P0`
+/// in the stick and `k (mu lambda / |z|) (P0 - z z^T / |z|^2)` in the slip: the slope of the
+/// force along the slip drops to zero as the node starts sliding (a kink Newton's method meets
+/// as it meets the contact's).
+fn stick_slip(f: &FrictionLag, y: &Vector3<f64>, eps: f64, with_hessian: bool) -> FrictionPart {
+    let radius = f.limit;
+    let k = radius / eps;
+    let projector = Matrix3::identity() - f.normal * f.normal.transpose();
+    let carried = projector * f.carried;
+    let z = carried + projector * (y - f.start) * k;
+    let phi = |z: &Vector3<f64>| {
+        let size = z.norm();
+        if size <= radius {
+            0.5 * size * size / k
+        } else {
+            (radius * size - 0.5 * radius * radius) / k
+        }
+    };
+    let size = z.norm();
+    let (gradient, hessian) = if size <= radius {
+        (z, projector * k)
+    } else {
+        let direction = z / size;
+        let slide = projector - direction * direction.transpose();
+        (direction * radius, slide * (k * radius / size))
+    };
+    FrictionPart {
+        energy: phi(&z) - phi(&carried),
+        gradient,
+        hessian: if with_hessian {
+            hessian
+        } else {
+            Matrix3::zeros()
+        },
+    }
 }
 
 /// The penalty at a node: energy, gradient, unit normal, normal force, and the potential's
@@ -260,6 +309,7 @@ mod tests {
             limit: 3.0,
             normal: Vector3::new(0.1, 0.2, 1.0).normalize(),
             start: Vector3::new(2.0, 1.0, 0.0),
+            carried: Vector3::zeros(),
         };
         // in front of a face, of an edge and of a corner of the faceted cap (centre z = -20)
         let [a, b, c] = tool.surface.triangles[0].map(|i| tool.surface.vertices[i]);
@@ -276,20 +326,30 @@ mod tests {
         assert!(matches!(features[0], Feature::Face), "{features:?}");
         assert!(matches!(features[1], Feature::Edge(_)), "{features:?}");
         assert!(matches!(features[2], Feature::Vertex), "{features:?}");
+        // eps 0.01 mm: the node slides; 1e3 mm: it sticks, with and without a carried force
+        let carried = [Vector3::zeros(), Vector3::new(-0.4, 0.9, 0.2)];
         for (k, &y) in points.iter().enumerate() {
-            let at = |z: Vector3<f64>| {
-                pair_contact(
-                    &tool,
-                    &z,
-                    tool.nearest(&z),
-                    500.0,
-                    &SETTINGS,
-                    Some(&lag),
-                    options(0.01, PairHessian::Exact),
-                )
-                .unwrap()
-            };
-            assert_derivatives(k, y, at);
+            for (eps, carried) in [0.01, 1e3]
+                .into_iter()
+                .flat_map(|e| carried.map(|c| (e, c)))
+            {
+                let lag = FrictionLag { carried, ..lag };
+                let at = |z: Vector3<f64>| {
+                    pair_contact(
+                        &tool,
+                        &z,
+                        tool.nearest(&z),
+                        500.0,
+                        &SETTINGS,
+                        Some(&lag),
+                        options(eps, PairHessian::Exact),
+                    )
+                    .unwrap()
+                };
+                let force = at(y).tangential.norm();
+                assert_eq!(force >= lag.limit * (1.0 - 1e-12), eps < 1.0, "{k} {eps}");
+                assert_derivatives(k, y, at);
+            }
         }
     }
 
@@ -345,6 +405,7 @@ mod tests {
                 limit: 3.0,
                 normal: tool.nearest(&y).unwrap().normal,
                 start: y + Vector3::new(0.02, -0.01, 0.0),
+                carried: Vector3::new(0.5, 1.0, -0.3),
             };
             let at = |z: Vector3<f64>| {
                 pair_contact(
@@ -399,6 +460,7 @@ mod tests {
             limit: 2.0,
             normal: Vector3::z(),
             start: Vector3::new(0.0, 0.0, 0.2),
+            carried: Vector3::zeros(),
         };
         let y = Vector3::new(1.0, 0.0, 0.2);
         let pair = pair_contact(
@@ -424,5 +486,77 @@ mod tests {
         )
         .unwrap();
         assert!(pair.tangential.norm() < 0.02 * 2.0, "sticks below eps");
+    }
+
+    /// The friction after a slip `total` made in `pieces` increments, each starting from the
+    /// last one's force, on the flat top of a plate.
+    fn after_slip(
+        total: Vector3<f64>,
+        pieces: usize,
+        eps: f64,
+        carried: Vector3<f64>,
+    ) -> Vector3<f64> {
+        let tool = punch();
+        let start = Vector3::new(0.0, 0.0, 0.2);
+        let mut lag = FrictionLag {
+            limit: 2.0,
+            normal: Vector3::z(),
+            start,
+            carried,
+        };
+        let mut force = -carried;
+        for i in 1..=pieces {
+            let y = start + total * (i as f64 / pieces as f64);
+            let pair = pair_contact(
+                &tool,
+                &y,
+                tool.nearest(&y),
+                500.0,
+                &SETTINGS,
+                Some(&lag),
+                options(eps, PairHessian::None),
+            )
+            .unwrap();
+            force = pair.tangential;
+            lag = FrictionLag {
+                start: y,
+                carried: -force,
+                ..lag
+            };
+        }
+        force
+    }
+
+    /// Cut into 1, 10 or 1,000 increments, the same slip gives the same friction force:
+    /// exactly Coulomb's `mu lambda` once it passes `eps`, the stick's `mu lambda s / eps`
+    /// below it. Without the carried force (each increment's stick starting from zero, as a
+    /// regularisation by the increment's slip alone does) the force would fall with the
+    /// increment's length.
+    #[test]
+    fn friction_does_not_depend_on_how_the_slip_is_cut() {
+        let eps = 1e-3;
+        for (total, expected) in [(0.05, 2.0), (4e-4, 2.0 * 0.4)] {
+            for pieces in [1, 10, 1000] {
+                let force = after_slip(Vector3::x() * total, pieces, eps, Vector3::zeros());
+                assert!(
+                    (force + Vector3::x() * expected).norm() < 1e-9 * expected,
+                    "{total} mm in {pieces}: {force}"
+                );
+            }
+        }
+    }
+
+    /// A node that slid one way carries Coulomb's force; sliding back, its force turns through
+    /// the stick: half after `eps / 2` of slip back, zero after `eps`, `mu lambda` the other
+    /// way after `2 eps`.
+    #[test]
+    fn the_stick_remembers_the_slip_before() {
+        let eps = 1e-3;
+        let slid = after_slip(Vector3::x() * 0.05, 20, eps, Vector3::zeros());
+        assert!((slid + Vector3::x() * 2.0).norm() < 1e-9);
+        let back = |s: f64| after_slip(-Vector3::x() * s, 7, eps, -slid);
+        assert!((back(0.5 * eps) + Vector3::x() * 1.0).norm() < 1e-9);
+        assert!(back(eps).norm() < 1e-9, "{}", back(eps));
+        assert!((back(3.0 * eps) - Vector3::x() * 2.0).norm() < 1e-9);
     }
 }

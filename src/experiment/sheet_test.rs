@@ -336,31 +336,43 @@ pub struct TestRun {
 /// Where frames go and how often.
 pub struct FrameOutput {
     pub series: PvdSeries,
-    /// A frame every this many records.
-    pub every: usize,
+    /// Simulated seconds between frames: a frame is written at the first record at or past
+    /// each multiple of it, so that the frames do not depend on how many records are made.
+    pub interval: f64,
     /// Process seconds per simulated second (the run's time scaling): a frame's time is the
     /// physical process time, `time_scaling` times the solver's.
     pub time_scaling: f64,
+    /// Simulated time of the next frame.
+    next: f64,
 }
 
 impl FrameOutput {
-    /// Writes the frame of record number `index` (from 0) if it is one of every `every`, or
-    /// if it is the `last` of a run that stops; at process time (the run's time times
+    /// `frames` frames over a run of `end_time` simulated seconds, and the first at its start.
+    pub fn new(series: PvdSeries, (frames, end_time): (usize, f64), time_scaling: f64) -> Self {
+        Self {
+            series,
+            interval: end_time / frames.max(1) as f64,
+            time_scaling,
+            next: 0.0,
+        }
+    }
+
+    /// Writes the frame of the record at `state` if it is the first at or past the next frame
+    /// time, or the `last` of a run that stops; at process time (the run's time times
     /// `time_scaling`).
-    pub fn at_record(
-        &mut self,
-        index: usize,
-        last: bool,
-        model: &Model,
-        state: &State,
-    ) -> anyhow::Result<()> {
-        if last || index.is_multiple_of(self.every.max(1)) {
+    pub fn at_record(&mut self, last: bool, model: &Model, state: &State) -> anyhow::Result<()> {
+        let due = state.time >= self.next - 1e-9 * self.interval;
+        if last || due {
             write_frame(
                 &mut self.series,
                 model,
                 state,
                 state.time * self.time_scaling,
             )?;
+        }
+        if due {
+            let done = (state.time / self.interval + 1e-9).floor();
+            self.next = (done + 1.0) * self.interval;
         }
         Ok(())
     }
@@ -401,7 +413,7 @@ impl<R> LiveOutput<'_, R> {
             history(records)?;
         }
         if let Some(frames) = &mut self.frames {
-            frames.at_record(records.len().saturating_sub(1), last, model, state)?;
+            frames.at_record(last, model, state)?;
         }
         Ok(())
     }
@@ -494,7 +506,12 @@ pub fn run_sheet_test(
                 settle_time,
                 force_bound,
                 loaded_work,
-                dynamic_advice: "lower --speed or --time-scaling (or --target-step)",
+                dynamic_advice: match solver {
+                    SolverKind::Explicit => "lower --speed or --time-scaling (or --target-step)",
+                    SolverKind::Implicit => {
+                        "lower --speed, or refine the specimen (--element-size)"
+                    }
+                },
             };
             match solver {
                 SolverKind::Explicit => checks::run(model, settings, check, &mut recorder),

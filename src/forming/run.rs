@@ -17,8 +17,9 @@ pub struct FormingRecord {
     pub time: f64,
     /// Punch travel (mm).
     pub stroke: f64,
-    /// Force the press puts on the punch along the stroke (N), averaged since the last record
-    /// (the load cell's reading: the contact springs ring from step to step).
+    /// Force the press puts on the punch along the stroke (N): with the explicit solver
+    /// averaged since the last record (the load cell's reading: the contact springs ring from
+    /// step to step), with the implicit solver the force at the record.
     pub punch_force: f64,
     /// Normal force between the blank and the holder (N), and the holder's travel (mm).
     pub holder_force: f64,
@@ -60,13 +61,19 @@ struct Recorder<'a, 'p, 'o> {
 }
 
 impl Recorder<'_, '_, '_> {
-    /// The punch force averaged since the last record, from the punch's impulse; the
-    /// instantaneous force at the first record.
-    fn mean_punch_force(&mut self, state: &State) -> f64 {
+    /// The punch force of the record: for the explicit solver averaged since the last record,
+    /// from the punch's impulse (the contact springs ring from step to step), the instantaneous
+    /// force at the first record; for the implicit solver, whose increments end in equilibrium,
+    /// the force at the record, so that it does not depend on how often records are made.
+    fn punch_force(&mut self, state: &State) -> f64 {
         let punch = self.forming.punch_tool;
         let impulse = state.tool_impulses[punch];
         let mean = match self.last_impulse {
-            Some((time, last)) if state.time > time => (impulse - last) / (state.time - time),
+            Some((time, last))
+                if state.time > time && self.forming.solver == SolverKind::Explicit =>
+            {
+                (impulse - last) / (state.time - time)
+            }
             _ => state.tool_loads[punch].force,
         };
         self.last_impulse = Some((state.time, impulse));
@@ -78,7 +85,7 @@ impl Observer for Recorder<'_, '_, '_> {
     fn record(&mut self, model: &Model, state: &State) -> anyhow::Result<()> {
         let f = self.forming;
         let holder = f.holder_tool;
-        let punch_force = self.mean_punch_force(state);
+        let punch_force = self.punch_force(state);
         self.records.push(FormingRecord {
             time: state.time,
             stroke: f.punch.displacement(state.time),
@@ -158,10 +165,13 @@ pub fn run(
                 checks::run(&forming.model, &forming.settings, check, &mut recorder)
             }
             SolverKind::Implicit => {
-                let settings = ImplicitSettings::new(
-                    forming.settings.end_time,
-                    forming.settings.output_interval,
-                );
+                let settings = ImplicitSettings {
+                    max_increment: Some(forming.max_increment),
+                    ..ImplicitSettings::new(
+                        forming.settings.end_time,
+                        forming.settings.output_interval,
+                    )
+                };
                 checks::watched(&forming.model, check, &mut recorder, |observer| {
                     implicit::run(&forming.model, &settings, observer, &mut statistics)
                 })
@@ -194,8 +204,14 @@ fn check_settings(forming: &FormingModel) -> Result<CheckSettings, String> {
             &forming.settings,
             forming.punch.speed,
         )?,
-        dynamic_advice: "lower process.punch_speed, process.time_scaling or \
-                         process.target_time_step",
+        dynamic_advice: match forming.solver {
+            SolverKind::Explicit => {
+                "lower process.punch_speed, process.time_scaling or process.target_time_step"
+            }
+            SolverKind::Implicit => {
+                "lower process.max_increment, or refine the blank (blank.element_size)"
+            }
+        },
     })
 }
 

@@ -340,6 +340,9 @@ pub struct Process {
     /// the physical stroke quasi-statically, without time or mass scaling.
     #[serde(default)]
     pub solver: SolverKind,
+    /// Largest increment of the implicit solver, in mm of punch travel; `None`: a sixtieth of
+    /// the stroke. The output settings never change the increments.
+    pub max_increment: Option<f64>,
 }
 
 fn one() -> f64 {
@@ -572,6 +575,13 @@ impl Scenario {
                      {key} out"
                 ));
             }
+        } else if p.max_increment.is_some() {
+            return Err(
+                "process.max_increment is only used by the implicit solver (the explicit \
+                 solver's steps are its stable time step): leave it out or set process.solver \
+                 = \"implicit\""
+                    .into(),
+            );
         }
         positive("process.stroke", p.stroke)?;
         positive("process.punch_speed", p.punch_speed)?;
@@ -615,6 +625,15 @@ impl Scenario {
         }
         if let Some(dt) = p.target_time_step {
             positive("process.target_time_step", dt)?;
+        }
+        if let Some(travel) = p.max_increment {
+            positive("process.max_increment", travel)?;
+            if travel > p.stroke {
+                return Err(format!(
+                    "process.max_increment = {travel} mm exceeds the stroke, {} mm",
+                    p.stroke
+                ));
+            }
         }
         Ok(())
     }

@@ -1,6 +1,7 @@
 //! Run-time checks shared by every run of the explicit solver (forming runs and the virtual
 //! tests): what explicit codes watch so that a run whose result means nothing does not end
-//! quietly. At every record: the kinetic energy against the internal work, the energy balance,
+//! quietly. At every checkpoint (the explicit solver's records, the implicit solver's
+//! increments, [`Observer::checkpoint`]): the kinetic energy against the internal work, the energy balance,
 //! the sign of the internal work, the size of the forces and the nodes lost behind a tool. A
 //! check past its hard limit stops the run with [`SolverError::Check`] (the records so far are
 //! kept by the observer); one past its warning level is reported in the [`CheckReport`].
@@ -17,11 +18,11 @@ use nalgebra::Vector3;
 pub const KINETIC_WARNING: f64 = 0.05;
 
 /// Kinetic energy over internal work above which the run is dynamic, not a forming or a test:
-/// half the work put in still moving. Stopped when it lasts [`KINETIC_STOP_RECORDS`] records in
-/// a row, so that one record caught on a contact impact does not stop a sound run.
+/// half the work put in still moving. Stopped when it lasts [`KINETIC_STOP_RECORDS`]
+/// checkpoints in a row, so that one caught on a contact impact does not stop a sound run.
 pub const KINETIC_STOP: f64 = 0.5;
 
-/// Consecutive records past [`KINETIC_STOP`] that stop the run.
+/// Consecutive checkpoints past [`KINETIC_STOP`] that stop the run.
 pub const KINETIC_STOP_RECORDS: usize = 5;
 
 /// Energy balance error `|W_ext - W_int - E_kin - W_damp| / W_ext` reported as a warning. The
@@ -177,7 +178,8 @@ pub fn carried_kinetic_energy(
     Ok(0.5 * mass * speed * speed)
 }
 
-/// Runs the solver with the checks watching every record; returns the outcome and the report.
+/// Runs the explicit solver with the checks watching every record; returns the outcome and the
+/// report.
 /// A stop by a check is a [`SolverError::Check`].
 pub fn run(
     model: &Model,
@@ -190,7 +192,8 @@ pub fn run(
     })
 }
 
-/// Runs `solve` (either solver) with the checks watching every record it makes.
+/// Runs `solve` (either solver) with the checks watching every checkpoint it makes
+/// ([`Observer::checkpoint`]).
 pub fn watched(
     model: &Model,
     check: CheckSettings,
@@ -212,7 +215,7 @@ pub fn watched(
     (outcome, report)
 }
 
-/// The observer of the run, with the checks after each of its records.
+/// The observer of the run, with the checks at each of its checkpoints.
 struct Checked<'a> {
     inner: &'a mut dyn Observer,
     watch: Watch,
@@ -220,8 +223,12 @@ struct Checked<'a> {
 
 impl Observer for Checked<'_> {
     fn record(&mut self, model: &Model, state: &State) -> anyhow::Result<()> {
-        self.inner.record(model, state)?;
-        self.watch.at_record(model, state)?;
+        self.inner.record(model, state)
+    }
+
+    fn checkpoint(&mut self, model: &Model, state: &State) -> anyhow::Result<()> {
+        self.inner.checkpoint(model, state)?;
+        self.watch.at_checkpoint(model, state)?;
         Ok(())
     }
 
@@ -234,11 +241,11 @@ impl Observer for Checked<'_> {
     }
 }
 
-/// What the checks keep between records.
+/// What the checks keep between checkpoints.
 struct Watch {
     settings: CheckSettings,
     nodes: usize,
-    /// Time and energies of every record.
+    /// Time and energies of every checkpoint.
     records: Vec<(f64, Energies)>,
     kinetic_run: usize,
     largest_force: f64,
@@ -259,7 +266,7 @@ impl Watch {
         }
     }
 
-    fn at_record(&mut self, model: &Model, state: &State) -> Result<(), CheckStop> {
+    fn at_checkpoint(&mut self, model: &Model, state: &State) -> Result<(), CheckStop> {
         self.records.push((state.time, state.energies));
         let result = self.check_record(model, state);
         if let Err(stop) = &result {
@@ -315,7 +322,7 @@ impl Watch {
             return Err(stop(
                 KINETIC,
                 format!(
-                    "the kinetic energy is {:.0} % of the internal work ({} records in a row \
+                    "the kinetic energy is {:.0} % of the internal work ({} checks in a row \
                      above {:.0} %): the run is dynamic, not quasi-static",
                     100.0 * ratio,
                     KINETIC_STOP_RECORDS,
@@ -473,7 +480,7 @@ fn largest_force(state: &State) -> f64 {
 /// Nodes behind a moving tool's surface deeper than the contact's reach (`max_penetration`):
 /// the penalty no longer holds them, so they went through the tool. Only the nodes inside the
 /// tool's bounding box, grown by three such depths (a flat holder's box is flat), are searched
-/// (a full search each, at records only); fixed tools do not move into the blank.
+/// (a full search each, at checkpoints only); fixed tools do not move into the blank.
 fn tunnelled_nodes(model: &Model, state: &State) -> usize {
     let contact = &model.contact;
     let depth = contact.max_penetration;

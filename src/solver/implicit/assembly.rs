@@ -359,9 +359,9 @@ pub struct Evaluator<'a> {
     /// normal over its edges), instead of their Gauss–Newton parts (which the projected
     /// tangent always takes).
     pub exact: bool,
-    /// Regularising sliding speed of friction (mm/s): the slip `eps` of an increment is it
-    /// times the increment's duration.
-    pub slip_rate: f64,
+    /// Elastic slip of friction's stick (mm): the slip at which a node starting from rest
+    /// reaches Coulomb's limit.
+    pub stick_slip: f64,
 }
 
 /// One element's share of the residual.
@@ -652,7 +652,7 @@ impl Evaluator<'_> {
             &self.model.contact,
             start.friction[n][k].as_ref(),
             PairOptions {
-                slip: self.slip_rate * start.dt,
+                slip: self.stick_slip,
                 hessian,
                 engaged: trial.engaged.map(|e| e[n][k]),
             },
