@@ -10,6 +10,7 @@
 //! - [`drape`]: kinematic (pin-jointed net) draping, a quick shear preview before forming;
 //! - [`forming`]: thermo-stamping runs from a scenario file (blank, tools, process);
 //! - [`io`]: readers and writers of the files users hand in and get back;
+//! - [`limits`]: the range of every number a user gives, and how numbers show in messages;
 //! - [`cli`]: the `thermostamp` command line.
 
 pub mod cli;
@@ -20,6 +21,7 @@ pub mod experiment;
 pub mod fit;
 pub mod forming;
 pub mod io;
+pub mod limits;
 pub mod material;
 pub mod mesh;
 pub mod solver;

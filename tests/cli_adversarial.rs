@@ -568,7 +568,7 @@ fn scenario_cases(f: &Fixtures) -> Vec<Case> {
         name: "scenario on a card of absurd stiffness".into(),
         args: run(&on_absurd, &[], "absurd-card"),
         code: 2,
-        names: vec!["process.target_time_step".into()],
+        names: vec![absurd, "warp_tension[0] (A2)".into()],
     });
     let garbage_card = f.file("garbage.toml", b"\x00\x01binary\xff");
     let on_garbage = f.scenario_on_card("scenario-garbage-card", &garbage_card);

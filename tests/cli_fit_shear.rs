@@ -251,7 +251,7 @@ fn bad_input_gives_one_line_naming_the_file() {
     let out = thermostamp(&short);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2));
-    assert!(stderr.contains("length/width = 1.667"), "{stderr}");
+    assert!(stderr.contains("length/width = 1.66667"), "{stderr}");
     let t300 = repo_path("materials/t300-5hs-pps.toml");
     let out = thermostamp(&args(data, t300.to_str().unwrap(), output));
     let stderr = String::from_utf8_lossy(&out.stderr);
@@ -264,7 +264,7 @@ fn bad_input_gives_one_line_naming_the_file() {
     );
     let mut prepreg = args(data, t300.to_str().unwrap(), output);
     prepreg.extend(["--temperature", "300", "--speed", "-1"]);
-    common::assert_bad_input(&prepreg, &["--speed -1", "positive"]);
+    common::assert_bad_input(&prepreg, &["--speed -1 mm/s", "out of range"]);
     let mut too_hot = args(data, t300.to_str().unwrap(), output);
     too_hot.extend(["--temperature", "400", "--speed", "1"]);
     common::assert_bad_input(&too_hot, &["t300-5hs-pps.toml", "400"]);

@@ -164,7 +164,7 @@ fn a_failing_case_is_recorded_and_the_sweep_goes_on() {
     let path = study(
         &dir,
         "tests/data/hemisphere-explicit.toml",
-        "process.punch_speed = [10.0, 1e6]",
+        "process.punch_speed = [10.0, 2000.0]",
     );
     let out = sweep(&path, &[]);
     let stderr = String::from_utf8_lossy(&out.stderr);

@@ -231,7 +231,7 @@ fn bad_input_is_an_error_before_any_fe_run() {
         (
             with(&|s| s.length = 90.0),
             start.to_vec(),
-            "length/width = 1.800",
+            "length/width = 1.8:",
         ),
         (
             with(&|s| s.max_iterations = 0),

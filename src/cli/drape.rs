@@ -6,13 +6,18 @@ use crate::drape::DrapeResult;
 use crate::forming::drape_preview::{drape_preview, Generators};
 use crate::io::vtk::{write_vtu, Field, FieldData, VtuFrame};
 use crate::io::write_csv;
+use crate::limits::{ranges_help, ANGLE};
 use crate::mesh::Cell;
 use anyhow::Context;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 #[derive(clap::Args, Debug)]
-#[command(after_help = super::shared::SCENARIO_REFERENCE)]
+#[command(after_help = format!(
+    "{}\n\n{}",
+    super::shared::SCENARIO_REFERENCE,
+    ranges_help(&[("--warp-angle", ANGLE)])
+))]
 pub struct Args {
     #[command(flatten)]
     scenario: ScenarioArgs,
@@ -39,10 +44,12 @@ fn parse_point(text: &str) -> Result<(f64, f64), String> {
 }
 
 fn parse_angle(text: &str) -> Result<f64, String> {
-    match text.trim().parse::<f64>() {
-        Ok(a) if a.is_finite() => Ok(a),
-        _ => Err(format!("'{text}': expected an angle in degrees")),
-    }
+    let angle = text
+        .trim()
+        .parse::<f64>()
+        .map_err(|_| format!("'{text}': expected an angle in degrees"))?;
+    ANGLE.check("--warp-angle", angle)?;
+    Ok(angle)
 }
 
 pub fn run(args: &Args) -> anyhow::Result<()> {

@@ -3,6 +3,7 @@
 
 use crate::fit::card_key::{remove_key, replace_key, toml_array, toml_float, FIT_MARKER};
 use crate::fit::card_section::{matrix_section, replace_matrix_section};
+use crate::fit::least_squares::{Determination, MAX_POWER};
 use crate::fit::matrix::{fit_matrix, uniaxial_stress, BulkRule, Eta1, TemperatureFit};
 use crate::fit::shear::{
     fit_shear, read_force_curve, shear_points, ForceCurve, ShearFit, ShearPoint, ShearTest,
@@ -11,6 +12,10 @@ use crate::fit::shear_fe::{refine_shear_fe, FeRun, RefineSettings, ShearFeFit, S
 use crate::fit::shear_matrix::{matrix_layers, subtract_matrix, TestConditions};
 use crate::fit::tension_data::{read_manifest, TensionCurve};
 use crate::io::plot::{write_png, LinePlot, LineStyle, Series};
+use crate::limits::{
+    check_given, ranges_help, shown, BULK_MODULUS, FRICTION_ONSET, LENGTH, SHEAR_ANGLE, SPEED,
+    TEMPERATURE,
+};
 use crate::material::fabric::{ShearInteraction, ShearTerm};
 use crate::material::fabric_shear::DEFAULT_FRICTION_ONSET_DEG;
 use crate::material::{MaterialCard, TemperatureTable};
@@ -36,8 +41,9 @@ pub enum ShearTestKind {
 }
 
 #[derive(clap::Args, Debug)]
-#[command(
-    after_help = "CSV columns: displacement_mm (crosshead, increasing), force_N (>= 0).\n\
+#[command(after_help = format!(
+    "{}\n\n{}\n  --terms: powers 1 to {MAX_POWER}",
+    "CSV columns: displacement_mm (crosshead, increasing), force_N (>= 0).\n\
     Bias extension (default): --width W --length H (free length, H/W >= 2); the normalised\n\
     shear force of Cao et al. 2008 is solved recursively from small angles (docs/model.md §5).\n\
     Picture frame: --frame-side L (pin to pin) [--fabric-side, default L].\n\
@@ -46,13 +52,21 @@ pub enum ShearTestKind {
     nearly constant shear force t_B k_0 from the first degrees; locking = (k_l/3)\n\
     <I10 - sin^2(--locking-angle)>^3 (docs/model.md §3). A fit whose force falls as the shear\n\
     grows within the fitted range, or with a negative friction or locking coefficient, is\n\
-    refused.\n\
+    refused; so is one with a coefficient the data do not determine (its standard error\n\
+    larger than it, moving the fit by more than 5 %).\n\
     A card with matrix layers (a prepreg) needs --temperature and --speed of the test: the\n\
     layers' force, driven through the test's pin-jointed kinematics, is subtracted first.\n\
     --refine-fe (bias extension): starting from that fit, runs the FE bias-extension test\n\
     with the card (W/6 crossed cells) in a Gauss-Newton loop on the measured force curve;\n\
-    each iteration is one FE run (seconds to minutes)."
-)]
+    each iteration is one FE run (seconds to minutes).",
+    ranges_help(&[
+        ("--width, --length, --frame-side, --fabric-side, --fe-element-size", LENGTH),
+        ("--temperature", TEMPERATURE),
+        ("--speed", SPEED),
+        ("--max-shear, --locking-angle", SHEAR_ANGLE),
+        ("--friction-onset", FRICTION_ONSET),
+    ])
+))]
 pub struct ShearArgs {
     /// Force–displacement curve (CSV).
     #[arg(long)]
@@ -119,16 +133,18 @@ pub struct ShearArgs {
 }
 
 #[derive(clap::Args, Debug)]
-#[command(
-    after_help = "Manifest (TOML, paths relative to it), one [[curve]] per CSV file:\n  \
+#[command(after_help = format!(
+    "{}\n\n{}",
+    "Manifest (TOML, paths relative to it), one [[curve]] per CSV file:\n  \
     [[curve]]\n  \
     file = \"pps-280C-1.csv\"\n  \
     temperature = 280.0       # °C\n  \
     strain_rate = 1.0         # 1/s, or crosshead_speed (mm/s) and gauge_length (mm)\n\
     CSV columns: strain or stretch, and stress (true, MPa) or nominal_stress (MPa).\n\
     D1: --bulk-modulus K gives D1 = 2/K; --poisson nu gives K = 2G(1+nu)/(3(1-2nu)) with\n\
-    G = 2 C10(T); with neither, D1 is kept from --card."
-)]
+    G = 2 C10(T); with neither, D1 is kept from --card.",
+    ranges_help(&[("--bulk-modulus", BULK_MODULUS)])
+))]
 pub struct MatrixArgs {
     /// TOML manifest listing the curves with their temperature and strain rate.
     #[arg(long)]
@@ -162,6 +178,8 @@ pub fn run(command: &FitCommand) -> anyhow::Result<()> {
 }
 
 fn run_shear(args: &ShearArgs) -> anyhow::Result<()> {
+    check_shear_numbers(args)?;
+    let terms = shear_terms(args)?;
     let test = shear_test(args)?;
     if args.refine_fe && args.test == ShearTestKind::PictureFrame {
         anyhow::bail!(
@@ -169,19 +187,25 @@ fn run_shear(args: &ShearArgs) -> anyhow::Result<()> {
              picture frame shears homogeneously, so its analytic fit is already what the FE gives"
         );
     }
-    if !(args.max_shear.is_finite() && args.max_shear > 0.0 && args.max_shear < 90.0) {
-        anyhow::bail!(
-            "--max-shear {}: must lie between 0 and 90 degrees",
-            args.max_shear
-        );
-    }
     let (text, card) = read_card(&args.card)?;
     let thickness = fabric_thickness(&card, &args.card)?;
     let measured = read_force_curve(&args.data)?;
     let matrix = matrix_share(args, &card, &measured, &test)?;
     let curve = matrix.as_ref().map_or(&measured, |m| &m.fabric);
-    let terms = shear_terms(args)?;
     let fit = fit_shear(curve, &test, thickness, &terms, args.max_shear.to_radians())?;
+    let names: Vec<String> = terms.iter().map(ShearTerm::name).collect();
+    let coefficients = Coefficients {
+        names: &names,
+        values: &fit.result.parameters,
+        errors: &fit.result.standard_errors,
+        unit: "MPa",
+    };
+    check_determined(
+        &args.data.display().to_string(),
+        &format!("--terms {}", args.terms),
+        &coefficients,
+        &fit.result.determination(),
+    )?;
     // the analytic fit before the FE loop starts (it takes minutes); without one, the card
     // is written first, so that a reader closing the output early does not lose it
     let refined = if args.refine_fe {
@@ -198,8 +222,7 @@ fn run_shear(args: &ShearArgs) -> anyhow::Result<()> {
     let origin = args.output.display().to_string();
     let written = write_shear_law(&text, &law, &provenance)
         .map_err(|e| anyhow::anyhow!("{}: {e}", args.card.display()))?;
-    // The card must still load; anything else is a bug here, caught before writing.
-    MaterialCard::from_toml(&written, &origin)?;
+    fitted_card_loads(&written, &args.output, &args.data.display().to_string())?;
     std::fs::write(&args.output, &written).with_context(|| format!("cannot write {origin}"))?;
     if !args.refine_fe {
         print_shear_table(&fit, matrix.as_ref());
@@ -220,17 +243,45 @@ fn run_shear(args: &ShearArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// The numbers of `fit shear`'s options inside their ranges (`crate::limits`), before any
+/// file is read.
+fn check_shear_numbers(args: &ShearArgs) -> anyhow::Result<()> {
+    check_given([
+        ("--width", args.width, LENGTH),
+        ("--length", args.length, LENGTH),
+        ("--frame-side", args.frame_side, LENGTH),
+        ("--fabric-side", args.fabric_side, LENGTH),
+        ("--temperature", args.temperature, TEMPERATURE),
+        ("--speed", args.speed, SPEED),
+        ("--max-shear", Some(args.max_shear), SHEAR_ANGLE),
+        ("--fe-element-size", args.fe_element_size, LENGTH),
+    ])
+    .map_err(anyhow::Error::msg)
+}
+
 /// The terms `--terms` names (module doc of `fit::shear`), with `--friction-onset` and
-/// `--locking-angle`: each once, powers from 1, `locking` only with its angle.
+/// `--locking-angle`: each once, powers from 1 to [`MAX_POWER`] (checked before any term is
+/// made: `--terms 4294967295` would be 4294967295 of them), `locking` only with its angle.
 fn shear_terms(args: &ShearArgs) -> anyhow::Result<Vec<ShearTerm>> {
     let bad = |why: String| anyhow::anyhow!("--terms {}: {why}", args.terms);
+    let beyond = |k: &str| {
+        bad(format!(
+            "power {k} is beyond {MAX_POWER}, the highest a fit determines (a higher power of \
+             I10 is flat over all but the last points of a curve)"
+        ))
+    };
+    // a power: digits only, however many (too many for any integer type is still a power)
+    let power = |token: &str| match token.parse::<u32>() {
+        Ok(k) if k <= MAX_POWER => Ok(Some(k)),
+        _ if !token.is_empty() && token.bytes().all(|b| b.is_ascii_digit()) => Err(beyond(token)),
+        _ => Ok(None),
+    };
     let tokens: Vec<&str> = args.terms.split(',').map(str::trim).collect();
     if let [single] = tokens.as_slice() {
-        if let Ok(m) = single.parse::<u32>() {
-            if m == 0 {
-                return Err(bad("at least one term is needed".into()));
-            }
-            return Ok(crate::fit::shear::polynomial_terms(m));
+        match power(single)? {
+            Some(0) => return Err(bad("at least one term is needed".into())),
+            Some(m) => return Ok(crate::fit::shear::polynomial_terms(m)),
+            None => {}
         }
     }
     let mut terms = Vec::new();
@@ -238,31 +289,33 @@ fn shear_terms(args: &ShearArgs) -> anyhow::Result<Vec<ShearTerm>> {
         let term = match token {
             "friction" => {
                 let onset = args.friction_onset;
-                if !(onset.is_finite() && onset > 0.0 && onset < 15.0) {
-                    anyhow::bail!(
-                        "--friction-onset {onset}: must be an angle between 0 and 15 degrees"
-                    );
-                }
+                FRICTION_ONSET
+                    .check("--friction-onset", onset)
+                    .map_err(anyhow::Error::msg)?;
                 ShearTerm::Friction {
                     onset: onset.to_radians(),
                 }
             }
             "locking" => match args.locking_angle {
-                Some(a) if a.is_finite() && a > 0.0 && a < 90.0 => ShearTerm::Locking {
-                    angle: a.to_radians(),
-                },
-                Some(a) => anyhow::bail!("--locking-angle {a}: must lie between 0 and 90 degrees"),
+                Some(a) => {
+                    SHEAR_ANGLE
+                        .check("--locking-angle", a)
+                        .map_err(anyhow::Error::msg)?;
+                    ShearTerm::Locking {
+                        angle: a.to_radians(),
+                    }
+                }
                 None => anyhow::bail!(
                     "--terms {}: the locking term needs --locking-angle (degrees), where the \
                      yarns begin to jam",
                     args.terms
                 ),
             },
-            power => match power.parse::<u32>() {
-                Ok(k) if k >= 1 => ShearTerm::Power(k),
+            other => match power(other)? {
+                Some(k) if k >= 1 => ShearTerm::Power(k),
                 _ => {
                     return Err(bad(format!(
-                        "'{power}' is not a term: friction, locking or a power 1, 2, ..."
+                        "'{other}' is not a term: friction, locking or a power 1, 2, ..."
                     )))
                 }
             },
@@ -273,6 +326,64 @@ fn shear_terms(args: &ShearArgs) -> anyhow::Result<Vec<ShearTerm>> {
         terms.push(term);
     }
     Ok(terms)
+}
+
+/// A fit's coefficients as its table prints them: names, values, standard errors, unit.
+pub(super) struct Coefficients<'a> {
+    pub names: &'a [String],
+    pub values: &'a [f64],
+    pub errors: &'a [f64],
+    pub unit: &'a str,
+}
+
+/// Refuses a fit with a coefficient that the data (`data`) do not determine
+/// ([`Determination::undetermined`]), naming it and `option`, which chose the terms; notes
+/// on standard error the terms the fit does not need.
+pub(super) fn check_determined(
+    data: &str,
+    option: &str,
+    c: &Coefficients,
+    determination: &Determination,
+) -> anyhow::Result<()> {
+    let describe = |i: usize| {
+        format!(
+            "{} = {} ± {} {}",
+            c.names[i],
+            shown(c.values[i]),
+            shown(c.errors[i]),
+            c.unit
+        )
+    };
+    if let Some(i) = determination.undetermined {
+        anyhow::bail!(
+            "{data}: the data do not determine {}: its standard error exceeds it and moves the \
+             fit by more than 5 %; fit fewer or other terms ({option})",
+            describe(i)
+        );
+    }
+    for &i in &determination.not_needed {
+        eprintln!(
+            "note: {data}: {} is not determined by the data (its standard error exceeds it), \
+             but moves the fit by less than 5 %: the fit does not need the term ({option})",
+            describe(i)
+        );
+    }
+    Ok(())
+}
+
+/// The card a fit is about to write must load. The rest of it loaded as the input card, so
+/// when it does not the fitted coefficients are the cause: the message names the data they
+/// were fitted to (`data`), and `output` is not written.
+pub(super) fn fitted_card_loads(text: &str, output: &Path, data: &str) -> anyhow::Result<()> {
+    match MaterialCard::from_toml(text, &output.display().to_string()) {
+        Ok(_) => Ok(()),
+        Err(e) => anyhow::bail!(
+            "{data}: the coefficients fitted to it make a card that does not load, so {} is not \
+             written: {}; fit fewer or other terms, or over another range",
+            output.display(),
+            e.message
+        ),
+    }
 }
 
 /// `card` with its `[fabric]` shear law set to `law`: `shear` (the polynomial, with
@@ -446,9 +557,6 @@ fn matrix_share(
             args.card.display()
         );
     };
-    if !(speed.is_finite() && speed > 0.0) {
-        anyhow::bail!("--speed {speed}: the crosshead speed must be positive (mm/s)");
-    }
     let conditions = TestConditions { temperature, speed };
     let (fabric, force) = subtract_matrix(measured, &layers, test, conditions).map_err(|e| {
         anyhow::anyhow!(
@@ -693,8 +801,7 @@ fn run_matrix(args: &MatrixArgs) -> anyhow::Result<()> {
     };
     let origin = args.output.display().to_string();
     if card.is_some() {
-        // The card must still load; anything else is a bug here, caught before writing.
-        MaterialCard::from_toml(&text, &origin)?;
+        fitted_card_loads(&text, &args.output, &args.manifest.display().to_string())?;
     }
     std::fs::write(&args.output, &text).with_context(|| format!("cannot write {origin}"))?;
     print_table(&fits);

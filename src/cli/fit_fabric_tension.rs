@@ -1,10 +1,15 @@
 //! `thermostamp fit fabric-tension`: the yarn tension coefficients `A_k` of a card's `[fabric]`
 //! from strip tension tests along warp and weft (docs/model.md §3, §5).
 
+use super::fit::{check_determined, fitted_card_loads, Coefficients};
 use crate::fit::card_key::{replace_key, toml_array, FIT_MARKER};
-use crate::fit::fabric_tension::{fit_yarn_tension, strip_force_per_width, TensionFit};
+use crate::fit::fabric_tension::{
+    check_terms, fit_yarn_tension, strip_force_per_width, TensionFit,
+};
+use crate::fit::least_squares::MAX_POWER;
 use crate::fit::strip_data::{read_strip_curve, StripCurve};
 use crate::io::plot::{write_png, LinePlot, LineStyle, Series};
+use crate::limits::{ranges_help, LENGTH};
 use crate::material::MaterialCard;
 use anyhow::Context;
 use std::path::{Path, PathBuf};
@@ -12,10 +17,14 @@ use std::path::{Path, PathBuf};
 #[derive(clap::Args, Debug)]
 #[command(
     group = clap::ArgGroup::new("direction").required(true).multiple(true).args(["warp", "weft"]),
-    after_help = "CSV columns: strain (engineering) or stretch, and force_per_width (N/mm) or\n\
-    force (N, divided by --width). Model (docs/model.md §5): force per width\n  \
-    N(lambda) = t_B sum_{k=2..n} A_k (lambda - 1)^(k-1),\n\
-    t_B the card's fabric_thickness; points with lambda <= 1 are not fitted."
+    after_help = format!(
+        "CSV columns: strain (engineering) or stretch, and force_per_width (N/mm) or\n\
+        force (N, divided by --width). Model (docs/model.md §5): force per width\n  \
+        N(lambda) = t_B sum_{{k=2..n}} A_k (lambda - 1)^(k-1),\n\
+        t_B the card's fabric_thickness; points with lambda <= 1 are not fitted.\n\n{}\n  \
+        --terms: 1 to {MAX_POWER}",
+        ranges_help(&[("--width", LENGTH)])
+    )
 )]
 pub struct FabricTensionArgs {
     /// Strip test pulled along the warp (CSV); at least one of --warp, --weft is required, and
@@ -53,6 +62,12 @@ struct DirectionFit {
 }
 
 pub fn run(args: &FabricTensionArgs) -> anyhow::Result<()> {
+    if let Some(terms) = args.terms {
+        check_terms(terms).map_err(|why| anyhow::anyhow!("--terms {terms}: {why}"))?;
+    }
+    if let Some(width) = args.width {
+        LENGTH.check("--width", width).map_err(anyhow::Error::msg)?;
+    }
     let text = std::fs::read_to_string(&args.card)
         .with_context(|| format!("{}: cannot read the material card", args.card.display()))?;
     let card = MaterialCard::from_toml(&text, &args.card.display().to_string())?;
@@ -66,6 +81,18 @@ pub fn run(args: &FabricTensionArgs) -> anyhow::Result<()> {
         let curve = read_strip_curve(path, args.width)?;
         let terms = args.terms.unwrap_or(law.coefficients().len());
         let fit = fit_yarn_tension(&curve, thickness, terms)?;
+        let names: Vec<String> = (0..terms).map(|i| format!("A{}", i + 2)).collect();
+        let coefficients = Coefficients {
+            names: &names,
+            values: &fit.coefficients,
+            errors: &fit.standard_errors,
+            unit: "MPa",
+        };
+        let option = match args.terms {
+            Some(n) => format!("--terms {n}"),
+            None => format!("--terms, by default the card's {terms}"),
+        };
+        check_determined(&curve.origin, &option, &coefficients, &fit.determination)?;
         fits.push(DirectionFit { key, curve, fit });
     }
 
@@ -82,8 +109,8 @@ pub fn run(args: &FabricTensionArgs) -> anyhow::Result<()> {
         .map_err(|e| anyhow::anyhow!("{}: {e}", args.card.display()))?;
     }
     let origin = args.output.display().to_string();
-    // The card must still load (A2 > 0, tension >= 0 over the checked strains).
-    MaterialCard::from_toml(&written, &origin)?;
+    let data: Vec<String> = fits.iter().map(|d| d.curve.origin.clone()).collect();
+    fitted_card_loads(&written, &args.output, &data.join(" and "))?;
     std::fs::write(&args.output, &written).with_context(|| format!("cannot write {origin}"))?;
     print_table(&fits);
     if let Some(png) = &args.plot {

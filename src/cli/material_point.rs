@@ -13,12 +13,16 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 #[derive(clap::Args, Debug)]
-#[command(after_help = "History columns:\n  \
-    matrix, fabric: t,F11,F12,F13,F21,F22,F23,F31,F32,F33,T (full 3D F, T in °C)\n  \
-    laminate:       t,F11,F12,F21,F22,T (in-plane F)\n\
-    Output columns:\n  \
-    matrix, fabric: t,S11,S22,S33,S12,S23,S13,sigma11,sigma22,sigma33,sigma12,sigma23,sigma13 (MPa)\n  \
-    laminate:       t,N11,N22,N12,thickness (N/mm per unit reference width, mm)")]
+#[command(after_help = format!(
+    "{}\n\n{}",
+    "History columns:\n  \
+        matrix, fabric: t,F11,F12,F13,F21,F22,F23,F31,F32,F33,T (full 3D F, T in °C)\n  \
+        laminate:       t,F11,F12,F21,F22,T (in-plane F)\n\
+        Output columns:\n  \
+        matrix, fabric: t,S11,S22,S33,S12,S23,S13,sigma11,sigma22,sigma33,sigma12,sigma23,sigma13 (MPa)\n  \
+        laminate:       t,N11,N22,N12,thickness (N/mm per unit reference width, mm)",
+    crate::limits::ranges_help(&[("--angle", crate::limits::ANGLE)])
+))]
 pub struct Args {
     /// Material card (TOML), e.g. materials/t300-5hs-pps.toml.
     #[arg(long)]
@@ -58,9 +62,9 @@ const LAMINATE_COLUMNS: [&str; 6] = ["t", "F11", "F12", "F21", "F22", "T"];
 const LAMINATE_OUTPUT: [&str; 5] = ["t", "N11", "N22", "N12", "thickness"];
 
 pub fn run(args: &Args) -> anyhow::Result<()> {
-    if !args.angle.is_finite() {
-        anyhow::bail!("--angle must be a finite number of degrees");
-    }
+    crate::limits::ANGLE
+        .check("--angle", args.angle)
+        .map_err(anyhow::Error::msg)?;
     let card = MaterialCard::load(&args.card)?;
     let fibres = FibreDirections::in_plane(args.angle.to_radians());
     let (header, rows): (&[&str], Vec<Vec<f64>>) = match args.layer {

@@ -17,6 +17,7 @@ mod shared;
 mod sweep;
 mod virtual_test;
 
+use crate::limits::{shown, SHOWN_DIGITS};
 use crate::solver::SolverError;
 use clap::{Parser, Subcommand};
 
@@ -125,9 +126,6 @@ fn tidy_message(message: &str) -> String {
     drop_repeated_causes(&words.join(" "))
 }
 
-/// Significant digits kept of a number in a message.
-const SHOWN_DIGITS: usize = 6;
-
 /// Numbers of `word` written with more than [`SHOWN_DIGITS`] + 6 digits rounded to
 /// [`SHOWN_DIGITS`]; names with digits in them (`run_2026.csv`, `node12`) are left alone.
 fn round_long_numbers(word: &str) -> String {
@@ -149,7 +147,7 @@ fn round_long_numbers(word: &str) -> String {
             .is_some_and(|c| c.is_alphabetic() || *c == '_');
         match token.parse::<f64>() {
             Ok(x) if !followed_by_name && written_digits(&token) > SHOWN_DIGITS + 6 => {
-                out.push_str(&rounded(x))
+                out.push_str(&shown(x))
             }
             _ => out.push_str(&token),
         }
@@ -185,16 +183,6 @@ fn written_digits(token: &str) -> usize {
     let mantissa = token.split(['e', 'E']).next().unwrap_or(token);
     let digits: String = mantissa.chars().filter(char::is_ascii_digit).collect();
     digits.len()
-}
-
-/// `x` to [`SHOWN_DIGITS`] significant digits, plainly between 1e-4 and 1e7, else as `1.5e300`.
-fn rounded(x: f64) -> String {
-    let r: f64 = format!("{x:.*e}", SHOWN_DIGITS - 1).parse().unwrap_or(x);
-    if r == 0.0 || (1e-4..1e7).contains(&r.abs()) {
-        format!("{r}")
-    } else {
-        format!("{r:e}")
-    }
 }
 
 /// anyhow's `{:#}` joins contexts and causes with `: `; a cause that a context already

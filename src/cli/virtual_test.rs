@@ -16,6 +16,10 @@ use crate::io::output_folder::ProductFiles;
 use crate::io::plot::{write_png, LinePlot, LineStyle, Series};
 use crate::io::vtk::PvdSeries;
 use crate::io::CsvStream;
+use crate::limits::{
+    check_given, ranges_help, Range, ANGLE, DAMPING, FRAMES, HISTORY_POINTS, LENGTH, SPEED,
+    TEMPERATURE, TIME_SCALING, TIME_STEP,
+};
 use crate::material::MaterialCard;
 use crate::mesh::DiagonalPattern;
 use crate::solver::estimate::{self, RunEstimate};
@@ -25,13 +29,22 @@ use std::path::{Path, PathBuf};
 #[derive(clap::Subcommand, Debug)]
 pub enum TestCommand {
     /// Bias-extension test: ±45° specimen clamped at both ends and pulled (docs/model.md §5).
-    #[command(after_help = process_defaults(&BiasExtension::benchmark(DRY_TEMPERATURE).process))]
+    #[command(after_help = process_defaults(
+        &BiasExtension::benchmark(DRY_TEMPERATURE).process,
+        &[("--width, --length", LENGTH)]
+    ))]
     BiasExtension(BiasArgs),
     /// Uniaxial (strip) tension test: bottom edge clamped, top edge pulled, yarns at any angle.
-    #[command(after_help = process_defaults(&UniaxialTension::standard(DRY_TEMPERATURE).process))]
+    #[command(after_help = process_defaults(
+        &UniaxialTension::standard(DRY_TEMPERATURE).process,
+        &[("--width, --length", LENGTH), ("--ply-angle", ANGLE)]
+    ))]
     Uniaxial(UniaxialArgs),
     /// Picture-frame test: square specimen in a pin-jointed frame pulled along its diagonal.
-    #[command(after_help = process_defaults(&PictureFrame::standard(DRY_TEMPERATURE).process))]
+    #[command(after_help = process_defaults(
+        &PictureFrame::standard(DRY_TEMPERATURE).process,
+        &[("--side", LENGTH)]
+    ))]
     PictureFrame(PictureFrameArgs),
 }
 
@@ -88,35 +101,27 @@ pub struct CommonArgs {
 }
 
 impl CommonArgs {
-    /// The numbers given on the command line, each checked and named by its option, before
-    /// the test's own checks (which name them as the library does).
+    /// The numbers given on the command line, each inside its range (`crate::limits`) and
+    /// named by its option, before the test's own checks (which name them as the library does).
     fn check_numbers(&self) -> anyhow::Result<()> {
-        let positive = [
-            ("speed", self.speed),
-            ("element-size", self.element_size),
-            ("end-displacement", self.end_displacement),
-        ];
-        for (option, value) in positive {
-            if let Some(v) = value {
-                dimension(option, v)?;
-            }
-        }
-        if let Some(s) = self.time_scaling {
-            if !(s.is_finite() && s >= 1.0) {
-                anyhow::bail!("--time-scaling = {s}: must be at least 1");
-            }
-        }
-        if let Some(dt) = self.target_step {
-            if !(dt.is_finite() && dt >= 0.0) {
-                anyhow::bail!(
-                    "--target-step = {dt}: must be a positive time step (s), or 0 for none"
-                );
-            }
-        }
-        if !(self.damping.is_finite() && self.damping >= 0.0) {
-            anyhow::bail!("--damping = {}: must be >= 0 (1/s)", self.damping);
-        }
-        Ok(())
+        // 0 turns mass scaling off; any other step is one
+        let target_step = self.target_step.filter(|&dt| dt != 0.0);
+        check_given([
+            ("--temperature", self.temperature, TEMPERATURE),
+            ("--speed", self.speed, SPEED),
+            ("--time-scaling", self.time_scaling, TIME_SCALING),
+            ("--target-step", target_step, TIME_STEP),
+            ("--damping", Some(self.damping), DAMPING),
+            ("--element-size", self.element_size, LENGTH),
+            ("--end-displacement", self.end_displacement, LENGTH),
+            ("--frames", Some(self.frames as f64), FRAMES),
+            (
+                "--history-points",
+                Some(self.history_points as f64),
+                HISTORY_POINTS,
+            ),
+        ])
+        .map_err(anyhow::Error::msg)
     }
 
     /// Overrides a test's default process with the options given.
@@ -202,24 +207,39 @@ pub fn run(command: &TestCommand) -> anyhow::Result<()> {
 const DRY_TEMPERATURE: f64 = 20.0;
 
 /// The defaults of a test's process for its `--help`, read from the test itself so that the
-/// help says what the test does.
-fn process_defaults(p: &TestProcess) -> String {
+/// help says what the test does; then the ranges of the options, the test's `own` among them.
+fn process_defaults(p: &TestProcess, own: &[(&str, Range)]) -> String {
     let mass_scaling = match p.target_time_step {
         Some(dt) => format!("{dt:e} s"),
         None => "none (physical mass)".into(),
     };
+    let ranges: Vec<(&str, Range)> = own
+        .iter()
+        .copied()
+        .chain([
+            ("--temperature", TEMPERATURE),
+            ("--speed", SPEED),
+            ("--time-scaling", TIME_SCALING),
+            ("--target-step (or 0)", TIME_STEP),
+            ("--damping", DAMPING),
+            ("--element-size, --end-displacement", LENGTH),
+            ("--frames", FRAMES),
+            ("--history-points", HISTORY_POINTS),
+        ])
+        .collect();
     format!(
         "Defaults of this test:\n  \
          --speed {:.3} mm/s ({:.0} mm/min)\n  \
          --time-scaling {}\n  \
          --target-step {mass_scaling}\n  \
          --element-size {} mm\n  \
-         --end-displacement {} mm",
+         --end-displacement {} mm\n\n{}",
         p.speed,
         p.speed * 60.0,
         p.time_scaling,
         p.element_size,
         p.end_displacement,
+        ranges_help(&ranges)
     )
 }
 
@@ -239,22 +259,19 @@ fn card_and_temperature(common: &CommonArgs) -> anyhow::Result<(MaterialCard, f6
     Ok((card, temperature))
 }
 
-/// A specimen dimension given on the command line: a positive number, or an error naming the
-/// option.
+/// A specimen dimension given on the command line: a length (`crate::limits::LENGTH`), or an
+/// error naming the option.
 fn dimension(option: &str, value: f64) -> anyhow::Result<f64> {
-    if value.is_finite() && value > 0.0 {
-        Ok(value)
-    } else {
-        anyhow::bail!("--{option} = {value}: must be a positive number")
-    }
+    LENGTH.check(option, value).map_err(anyhow::Error::msg)?;
+    Ok(value)
 }
 
 fn bias_extension(args: &BiasArgs) -> anyhow::Result<()> {
     let c = &args.common;
     let (card, temperature) = card_and_temperature(c)?;
     let mut test = BiasExtension::benchmark(temperature);
-    test.width = dimension("width", args.width)?;
-    test.length = dimension("length", args.length)?;
+    test.width = dimension("--width", args.width)?;
+    test.length = dimension("--length", args.length)?;
     test.process.element_size = test.default_element_size();
     c.apply(&mut test.process);
     let names = ("bias extension", "bias-extension");
@@ -266,14 +283,11 @@ fn uniaxial(args: &UniaxialArgs) -> anyhow::Result<()> {
     let c = &args.common;
     let (card, temperature) = card_and_temperature(c)?;
     let mut test = UniaxialTension::standard(temperature);
-    test.width = dimension("width", args.width)?;
-    test.length = dimension("length", args.length)?;
-    if !args.ply_angle.is_finite() {
-        anyhow::bail!(
-            "--ply-angle = {}: must be an angle in degrees",
-            args.ply_angle
-        );
-    }
+    test.width = dimension("--width", args.width)?;
+    test.length = dimension("--length", args.length)?;
+    ANGLE
+        .check("--ply-angle", args.ply_angle)
+        .map_err(anyhow::Error::msg)?;
     test.ply_angle = args.ply_angle;
     test.process.element_size = test.default_element_size();
     c.apply(&mut test.process);
@@ -286,7 +300,7 @@ fn picture_frame(args: &PictureFrameArgs) -> anyhow::Result<()> {
     let c = &args.common;
     let (card, temperature) = card_and_temperature(c)?;
     let mut test = PictureFrame::standard(temperature);
-    test.side = dimension("side", args.side)?;
+    test.side = dimension("--side", args.side)?;
     test.process.element_size = test.default_element_size();
     c.apply(&mut test.process);
     let names = ("picture frame", "picture-frame");

@@ -4,12 +4,13 @@
 
 use super::kinematics::{
     bias_extension_normalised_shear_force, bias_extension_normalised_shear_force_at_zero_shear,
-    bias_extension_shear_angle,
+    bias_extension_shear_angle, check_bias_aspect,
 };
 use super::sheet_test::{
     clamped_strip, clamped_strip_measurement, validate_strip, Measurement, Record, SheetTest,
     SheetTestRun, TestProcess,
 };
+use crate::limits::shown_apart;
 use crate::material::Laminate;
 use crate::mesh::DiagonalPattern;
 use crate::solver::Model;
@@ -118,20 +119,14 @@ impl SheetTest for BiasExtension {
     /// checks; four cells across the width at least, so that the central zone has elements.
     fn validate(&self) -> Result<(), String> {
         validate_strip(self.width, self.length, self.ply_angle)?;
-        if self.length < 2.0 * self.width {
-            return Err(format!(
-                "length/width = {:.3}: the bias-extension kinematics needs a free length of at \
-                 least twice the width",
-                self.length / self.width
-            ));
-        }
+        check_bias_aspect(self.width, self.length)?;
         let p = &self.process;
         let limit = (std::f64::consts::SQRT_2 - 1.0) * (self.length - self.width);
         if p.end_displacement >= limit {
             return Err(format!(
-                "end displacement {} mm reaches the pin-jointed limit of {limit:.1} mm (90° of \
-                 shear)",
-                p.end_displacement
+                "end displacement {} mm reaches the pin-jointed limit of {} mm (90° of shear)",
+                shown_apart(p.end_displacement, limit),
+                shown_apart(limit, p.end_displacement)
             ));
         }
         if p.element_size > 0.25 * self.width {

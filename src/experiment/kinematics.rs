@@ -1,6 +1,20 @@
 //! Closed-form kinematics and force normalisation of the standard shear tests (docs/model.md §5).
 
+use crate::limits::shown_apart;
 use std::f64::consts::FRAC_PI_2;
+
+/// The bias-extension kinematics needs a free length `length` of at least twice the width
+/// `width` (mm); the refusal shows the ratio with the digits that put it below 2.
+pub fn check_bias_aspect(width: f64, length: f64) -> Result<(), String> {
+    if length < 2.0 * width {
+        return Err(format!(
+            "length/width = {}: the bias-extension kinematics (docs/model.md §5) needs a free \
+             length of at least twice the width",
+            shown_apart(length / width, 2.0)
+        ));
+    }
+    Ok(())
+}
 
 /// Bias extension of a specimen `width` x `length` (free length, `length/width >= 2`):
 /// pin-jointed shear angle of the central zone at crosshead displacement `d` (radians),

@@ -25,6 +25,7 @@ use super::kinematics::{picture_frame_angles, picture_frame_normalised_force};
 use super::sheet_test::{
     mean_shear_angle, positive, Measurement, Reading, Record, SheetTest, SheetTestRun, TestProcess,
 };
+use crate::limits::shown_apart;
 use crate::material::Laminate;
 use crate::mesh::{rectangle, DiagonalPattern, Mesh};
 use crate::solver::SolverKind;
@@ -209,10 +210,12 @@ impl SheetTest for PictureFrame {
         self.process.validate_on(("side", self.side))?;
         let limit = self.kinematics().closing_displacement();
         if self.process.end_displacement >= limit {
+            let end = self.process.end_displacement;
             return Err(format!(
-                "end displacement {} mm reaches the frame's limit of {limit:.1} mm (arms closed, \
-                 90° of shear)",
-                self.process.end_displacement
+                "end displacement {} mm reaches the frame's limit of {} mm (arms closed, 90° of \
+                 shear)",
+                shown_apart(end, limit),
+                shown_apart(limit, end)
             ));
         }
         Ok(())

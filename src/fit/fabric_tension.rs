@@ -20,7 +20,7 @@
 //! - The model is linear in the `A_k`; the Levenberg–Marquardt wrapper of
 //!   [`super::least_squares`] is used all the same for its standard errors and its checks.
 
-use super::least_squares::{fit, FitError, Residuals};
+use super::least_squares::{fit, varies, Determination, FitError, Residuals, MAX_POWER};
 use super::strip_data::StripCurve;
 use crate::io::InputError;
 use nalgebra::{DMatrix, DVector};
@@ -53,6 +53,8 @@ pub struct TensionFit {
     pub rms_residual: f64,
     /// Points fitted (those with `lambda > 1`).
     pub points: usize,
+    /// How well the points fix each `A_k`.
+    pub determination: Determination,
 }
 
 /// Share of the largest force under which a point's residual is no longer relative.
@@ -66,10 +68,18 @@ pub fn fit_yarn_tension(
     terms: usize,
 ) -> Result<TensionFit, InputError> {
     let error = |message: String| InputError::in_file(&curve.origin, message);
-    if terms == 0 {
-        return Err(error("--terms 0: the law needs at least A2".into()));
-    }
+    check_terms(terms).map_err(|why| error(format!("--terms {terms}: {why}")))?;
     let points = StripPoints::of(curve, thickness);
+    // more points than coefficients, all of one force: nothing to follow; fewer are the fit's
+    // own refusal
+    if points.force.len() > terms && !varies(&points.force) {
+        return Err(error(format!(
+            "the force does not vary: force_per_width is {} N/mm at all {} points in tension; \
+             there is nothing to fit",
+            crate::limits::shown(points.force[0]),
+            points.force.len()
+        )));
+    }
     let result = fit(&points, &points.initial(terms)).map_err(|e| error(describe(e, terms)))?;
     let a2 = result.parameters[0];
     if a2 <= 0.0 {
@@ -81,10 +91,25 @@ pub fn fit_yarn_tension(
     }
     Ok(TensionFit {
         rms_residual: points.rms_misfit(&result.parameters),
+        determination: result.determination(),
         coefficients: result.parameters,
         standard_errors: result.standard_errors,
         points: result.observations,
     })
+}
+
+/// `terms` coefficients `A_2..` can be fitted: at least one, at most [`MAX_POWER`] (checked
+/// before anything is made for them).
+pub fn check_terms(terms: usize) -> Result<(), String> {
+    match terms {
+        0 => Err("the law needs at least A2".into()),
+        n if n > MAX_POWER as usize => Err(format!(
+            "more than the {MAX_POWER} coefficients A_2..A_{} a fit determines (a higher power \
+             of the strain is flat over all but the last points of a curve)",
+            MAX_POWER + 1
+        )),
+        _ => Ok(()),
+    }
 }
 
 fn describe(e: FitError, terms: usize) -> String {
@@ -235,5 +260,30 @@ mod tests {
             .to_string();
         assert!(e.starts_with("f.csv: fitted A2 = "), "{e}");
         assert!(fit_yarn_tension(&falling, THICKNESS, 0).is_err());
+    }
+
+    /// A flat curve has nothing to fit; more coefficients than [`MAX_POWER`] are refused
+    /// before anything is allocated for them.
+    #[test]
+    fn flat_curves_and_too_many_terms_are_refused() {
+        let flat = StripCurve {
+            origin: "flat.csv".into(),
+            stretch: vec![1.0, 1.01, 1.02, 1.03, 1.04],
+            force_per_width: vec![5.0; 5],
+        };
+        let e = fit_yarn_tension(&flat, THICKNESS, 2)
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("flat.csv: the force does not vary"), "{e}");
+        let curve = strip_curve("w.csv", THICKNESS, &CARD, (0.02, 21), 0.0, &mut Lcg::new(1));
+        for terms in [11, usize::MAX] {
+            let e = fit_yarn_tension(&curve, THICKNESS, terms)
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.contains(&format!("--terms {terms}: more than the 10")),
+                "{e}"
+            );
+        }
     }
 }

@@ -23,6 +23,10 @@ pub struct FitResult {
     /// `sqrt(diag(s^2 (J^T J)^-1))` with `s^2 = SSR / (n - p)`: the usual linearised standard
     /// errors for independent residuals of equal variance.
     pub standard_errors: Vec<f64>,
+    /// Per parameter, the most that one standard error of it moves a residual: how much its
+    /// uncertainty matters to the fit (for the relative residuals of this crate's fits, a share
+    /// of the observation).
+    pub uncertain_shares: Vec<f64>,
     /// `sqrt(SSR / n)`, in the units of the residuals.
     pub rms_residual: f64,
     /// Sum of squared residuals.
@@ -49,10 +53,59 @@ pub enum FitError {
     NotConverged { reason: String },
 }
 
+/// Highest power of its variable a polynomial fit may have **(choice)**: `fit shear`'s
+/// `c_k I10^k` (k <= 10) and `fit fabric-tension`'s `A_k (lambda - 1)^(k-1)` (10
+/// coefficients). A higher power is flat over most of the data and fits only its last few
+/// points (`c_10 I10^10` at half the largest `I10` is 1/1000 of its value there; `c_100` fitted
+/// to a bias-extension curve came out as 2.5e19 MPa), and the full polynomials of that degree
+/// are past [`MAX_CONDITION`] anyway.
+pub const MAX_POWER: u32 = 10;
+
+/// A parameter whose standard error exceeds its value and moves a residual by more than this
+/// (5 % of an observation, for relative residuals) is not determined by the data: the fit is
+/// refused ([`FitResult::determination`]). One whose uncertainty moves the fit less is merely
+/// not needed, its term harmless.
+pub const UNDETERMINED_SHARE: f64 = 0.05;
+
 /// Columns of a Jacobian whose scaled condition number exceeds this are taken as dependent:
 /// well past what double precision can resolve in `(J^T J)^-1`. The FE refinement's surrogate
 /// Jacobian (`shear_fe`) is held to the same bound.
 pub(crate) const MAX_CONDITION: f64 = 1e10;
+
+/// How well the data fix the parameters of a fit: those whose standard error is larger than
+/// their value (each could as well be zero, or twice as large), split by whether that matters.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Determination {
+    /// The first whose uncertainty moves the fit by more than [`UNDETERMINED_SHARE`]
+    /// somewhere: the data do not determine it, and a fit with it is refused.
+    pub undetermined: Option<usize>,
+    /// Those whose uncertainty moves the fit less: terms the fit does not need, harmless.
+    pub not_needed: Vec<usize>,
+}
+
+impl FitResult {
+    pub fn determination(&self) -> Determination {
+        let loose = |i: &usize| self.standard_errors[*i] > self.parameters[*i].abs();
+        let (undetermined, not_needed): (Vec<usize>, Vec<usize>) = (0..self.parameters.len())
+            .filter(loose)
+            .partition(|&i| self.uncertain_shares[i] > UNDETERMINED_SHARE);
+        Determination {
+            undetermined: undetermined.first().copied(),
+            not_needed,
+        }
+    }
+}
+
+/// Whether `data` vary at all (by more than a rounding error of their size): a curve of one
+/// value has no shape to fit, and its misfit over its range would be infinite.
+pub fn varies(data: &[f64]) -> bool {
+    let (lo, hi) = data
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
+            (lo.min(v), hi.max(v))
+        });
+    hi - lo > crate::limits::ROUNDING * lo.abs().max(hi.abs())
+}
 
 /// Fits `problem` starting from `initial` with Levenberg–Marquardt.
 pub fn fit<R: Residuals>(problem: &R, initial: &[f64]) -> Result<FitResult, FitError> {
@@ -85,11 +138,19 @@ pub fn fit<R: Residuals>(problem: &R, initial: &[f64]) -> Result<FitResult, FitE
             reason: "the parameters or residuals are not finite".into(),
         });
     }
-    let inverse = covariance_factor(&problem.jacobian(&x))?;
+    let jacobian = problem.jacobian(&x);
+    let inverse = covariance_factor(&jacobian)?;
     let s2 = ssr / (n - p) as f64;
+    let standard_errors: Vec<f64> = (0..p).map(|i| (s2 * inverse[(i, i)]).sqrt()).collect();
+    let uncertain_shares = jacobian
+        .column_iter()
+        .zip(&standard_errors)
+        .map(|(column, se)| se * column.amax())
+        .collect();
     Ok(FitResult {
         parameters: x.iter().copied().collect(),
-        standard_errors: (0..p).map(|i| (s2 * inverse[(i, i)]).sqrt()).collect(),
+        standard_errors,
+        uncertain_shares,
         rms_residual: (ssr / n as f64).sqrt(),
         ssr,
         observations: n,
@@ -247,6 +308,35 @@ mod tests {
         let fit = fit(&Exponential { x, y }, &[1.0, 0.0]).unwrap();
         assert!((fit.parameters[0] - 3.0).abs() < 1e-8, "{fit:?}");
         assert!((fit.parameters[1] + 1.7).abs() < 1e-8, "{fit:?}");
+    }
+
+    /// A line fitted to points scattered about a flat level: the slope's standard error exceeds
+    /// it and, over a wide span of x, moves the fit by far more than 5 %: undetermined. The
+    /// level is determined.
+    #[test]
+    fn a_parameter_the_data_do_not_fix_is_undetermined() {
+        let x: Vec<f64> = (0..6).map(f64::from).collect();
+        let y: Vec<f64> = [1.0, 0.6, 1.4, 0.6, 1.4, 1.0].to_vec();
+        let fit = fit(&Line { x, y }, &[0.0, 0.0]).unwrap();
+        assert!(fit.standard_errors[0] > fit.parameters[0].abs(), "{fit:?}");
+        assert_eq!(fit.determination().undetermined, Some(0), "{fit:?}");
+        let exact = Line {
+            x: (0..6).map(f64::from).collect(),
+            y: (0..6)
+                .map(|i| 2.0 * f64::from(i) + 1.0 + 1e-3 * f64::from(i % 2))
+                .collect(),
+        };
+        let fit = super::fit(&exact, &[0.0, 0.0]).unwrap();
+        assert_eq!(fit.determination(), Determination::default(), "{fit:?}");
+    }
+
+    #[test]
+    fn constant_data_do_not_vary() {
+        assert!(!varies(&[5.0; 4]));
+        assert!(!varies(&[0.0; 3]));
+        assert!(!varies(&[1.0, 1.0 + 1e-12]));
+        assert!(varies(&[0.0, 1e-300]));
+        assert!(varies(&[1.0, 2.0]));
     }
 
     #[test]

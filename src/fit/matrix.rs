@@ -55,9 +55,7 @@ impl BulkRule {
     /// Checks the value given on the command line.
     pub fn validate(&self) -> Result<(), String> {
         match *self {
-            BulkRule::BulkModulus(k) if !(k.is_finite() && k > 0.0) => Err(format!(
-                "--bulk-modulus {k}: must be a positive modulus (MPa)"
-            )),
+            BulkRule::BulkModulus(k) => crate::limits::BULK_MODULUS.check("--bulk-modulus", k),
             BulkRule::Poisson(nu) if !(nu.is_finite() && nu > -1.0 && nu < 0.5) => Err(format!(
                 "--poisson {nu}: must lie in (-1, 0.5); 0.5 is incompressible, give a large \
                  --bulk-modulus instead"

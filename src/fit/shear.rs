@@ -18,10 +18,10 @@
 //! The model is linear in the coefficients; LM is used anyway for its standard errors and
 //! checks, started from zero.
 
-use super::least_squares::{fit, FitError, FitResult, Residuals};
+use super::least_squares::{fit, varies, FitError, FitResult, Residuals};
 use crate::experiment::kinematics::{
     bias_extension_force, bias_extension_normalised_shear_force, bias_extension_shear_angle,
-    picture_frame_angles, picture_frame_normalised_force,
+    check_bias_aspect, picture_frame_angles, picture_frame_normalised_force,
 };
 use crate::io::xy_curve::{parse_xy_curve, read_curve_text, CurveLayout};
 use crate::io::InputError;
@@ -145,14 +145,7 @@ impl ShearTest {
             ShearTest::BiasExtension { width, length } => {
                 positive("width", width)?;
                 positive("length", length)?;
-                if length < 2.0 * width {
-                    return Err(format!(
-                        "length/width = {:.3}: the bias-extension kinematics (docs/model.md §5) \
-                         needs a free length of at least twice the width",
-                        length / width
-                    ));
-                }
-                Ok(())
+                check_bias_aspect(width, length)
             }
             ShearTest::PictureFrame {
                 frame_side,
@@ -334,9 +327,22 @@ pub enum ShearFitError {
         source: FitError,
     },
     #[error(
+        "{origin}: the force does not vary: {} is {} N at all {points} points up to {}° of \
+         shear; there is nothing to fit",
+        FORCE_COLUMN,
+        crate::limits::shown(*.force),
+        crate::limits::shown(*.max_shear_deg)
+    )]
+    Flat {
+        origin: String,
+        force: f64,
+        points: usize,
+        max_shear_deg: f64,
+    },
+    #[error(
         "{origin}: the fitted law ({law}) gives a shear force that falls as the shear grows at \
          {angle_deg}°, inside the fitted range (up to {max_shear_deg}°): a negative shear \
-         stiffness; fit fewer or other terms (--terms), e.g. friction,1,2"
+         stiffness; fit fewer or other terms (--terms), e.g. friction,1,3"
     )]
     Softening {
         origin: String,
@@ -392,6 +398,17 @@ pub fn fit_shear(
             },
             points.len(),
         ));
+    }
+    // more points than terms, all of one force: the fit would follow nothing (and its misfit
+    // over the data's range would be infinite); fewer points are the fit's own refusal
+    let forces: Vec<f64> = points.iter().map(|p| p.crosshead_force).collect();
+    if points.len() > terms.len() && !varies(&forces) {
+        return Err(ShearFitError::Flat {
+            origin: curve.origin.clone(),
+            force: forces[0],
+            points: points.len(),
+            max_shear_deg: max_shear.to_degrees(),
+        });
     }
     let (basis, data) = observations(test, thickness, terms, &points);
     let problem = ShearResiduals::new(basis, data);
@@ -499,7 +516,14 @@ mod tests {
         let e = fit_shear(&curve, &short, 1.0, &polynomial_terms(3), 1.0)
             .unwrap_err()
             .to_string();
-        assert!(e.starts_with("b.csv: length/width = 1.667"), "{e}");
+        assert!(e.starts_with("b.csv: length/width = 1.66667"), "{e}");
+        let e = ShearTest::BiasExtension {
+            width: 150.0,
+            length: 299.9999,
+        }
+        .validate()
+        .unwrap_err();
+        assert!(e.starts_with("length/width = 1.999999:"), "{e}");
         let test = ShearTest::BiasExtension {
             width: 150.0,
             length: 450.0,
@@ -519,6 +543,28 @@ mod tests {
             e.starts_with("b.csv: line 3: displacement_mm = 200 is past"),
             "{e}"
         );
+    }
+
+    /// A curve of one force, zero or not, is refused as flat, not fitted to an infinite misfit
+    /// over its range.
+    #[test]
+    fn constant_force_is_refused_as_flat() {
+        let test = ShearTest::BiasExtension {
+            width: 150.0,
+            length: 450.0,
+        };
+        for force in [5.0, 0.0] {
+            let mut text = String::from("displacement_mm,force_N\n");
+            for d in 0..40 {
+                text.push_str(&format!("{d},{force}\n"));
+            }
+            let curve = parse_force_curve(&text, "flat.csv").unwrap();
+            let e = fit_shear(&curve, &test, 1.0, &polynomial_terms(1), 50f64.to_radians())
+                .unwrap_err()
+                .to_string();
+            assert!(e.starts_with("flat.csv: the force does not vary"), "{e}");
+            assert!(e.contains(&format!("is {force} N at all")), "{e}");
+        }
     }
 
     /// A bias curve made from known `c_k` by the forward Cao formula gives them back.

@@ -33,6 +33,7 @@ use super::shear::{ForceCurve, RELATIVE_FLOOR};
 use crate::experiment::bias_extension::BiasExtension;
 use crate::experiment::kinematics::{
     bias_extension_displacement, bias_extension_force, bias_extension_shear_angle,
+    check_bias_aspect,
 };
 use crate::experiment::sheet_test::{SheetTest, TestProcess};
 use crate::material::card::SHEAR_CHECK_LIMIT_DEG;
@@ -142,13 +143,7 @@ impl RefineSettings {
                 "largest shear angle {max_deg}°: must lie in (0, 85]° (the pin-jointed limit is 90°)"
             ));
         }
-        if self.length < 2.0 * self.width {
-            return Err(format!(
-                "length/width = {:.3}: the bias-extension kinematics (docs/model.md §5) needs \
-                 a free length of at least twice the width",
-                self.length / self.width
-            ));
-        }
+        check_bias_aspect(self.width, self.length)?;
         if self.max_iterations == 0 {
             return Err("at least one iteration is needed".into());
         }

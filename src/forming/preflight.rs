@@ -1,9 +1,11 @@
 //! The set-up refusals of a forming run that follow from its size and its step, each naming
 //! the scenario keys to change: a mesh or tool set that would not fit the machine (sized from
 //! the keys, before anything is built), an absurd step count, a stroke covered in too few
-//! steps, a punch that would pass through the blank in a step, absurd mass scaling.
+//! steps, a punch that would pass through the blank in a step, absurd mass scaling, a holder
+//! pressing the blank harder than any composite is formed.
 
 use super::scenario::{BlankShape, Scenario, ToolSet};
+use crate::limits::{shown, HOLDER_PRESSURE};
 use crate::material::MaterialCard;
 use crate::solver::estimate::{self, item_bytes, RunEstimate};
 use crate::solver::{implicit, Model, SolverSettings};
@@ -50,6 +52,25 @@ pub fn check_before_mesh(s: &Scenario, card: &MaterialCard) -> Result<(), String
         TOOL_KEYS
     };
     estimate::check_memory(blank + tools, keys).map_err(|e| format!("{}: {e}", s.origin))
+}
+
+/// Refuses a blank-holder force that would press the blank harder than any composite is
+/// formed: its mean pressure over the whole blank (`blank_area`, mm^2) beyond
+/// [`HOLDER_PRESSURE`]. The holder presses the flange only, so the true pressure is higher still.
+pub fn check_holder_pressure(s: &Scenario, blank_area: f64) -> Result<(), String> {
+    let force = s.process.blank_holder_force;
+    // a mesh without area is refused by its own checks, with a better message than a pressure
+    if force == 0.0 || blank_area.is_nan() || blank_area <= 0.0 {
+        return Ok(());
+    }
+    let key = format!(
+        "process.blank_holder_force = {} N on the blank's {} mm^2: the mean pressure",
+        shown(force),
+        shown(blank_area)
+    );
+    HOLDER_PRESSURE
+        .check(&key, force / blank_area)
+        .map_err(|e| format!("{}: {e}", s.origin))
 }
 
 /// The estimate of the built model, and the refusals it allows: memory, step count, the

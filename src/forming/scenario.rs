@@ -3,6 +3,10 @@
 //! be overridden from the command line (`--set process.temperature=310`).
 
 use crate::io::{from_toml_text, from_toml_value};
+use crate::limits::{
+    check_given, shown, shown_apart, ANGLE, FORCE, FRAMES, FRICTION, GAP, HISTORY_POINTS, LENGTH,
+    SHEAR_ANGLE, SPEED, TEMPERATURE, TIME_SCALING, TIME_STEP,
+};
 use crate::mesh::DiagonalPattern;
 use crate::solver::SolverKind;
 use nalgebra::Vector3;
@@ -113,20 +117,31 @@ impl BlankTable {
                 }
             }
         };
-        let direction = Vector3::from(self.reference_direction.unwrap_or([1.0, 0.0, 0.0]));
-        if !(direction.iter().all(|c| c.is_finite()) && direction.norm() > 0.0) {
-            return Err(format!(
-                "blank.reference_direction = {:?} must be a non-zero vector",
-                direction.as_slice()
-            ));
-        }
         Ok(Blank {
             card: folder.join(self.card),
             shape,
             ply_angle: self.ply_angle,
-            reference_direction: direction.normalize(),
+            reference_direction: unit_direction(self.reference_direction)?,
         })
     }
+}
+
+/// `blank.reference_direction` (default x) as a unit vector. Only its direction counts, but a
+/// vector whose length overflows (`[1e300, 1e300, 0]`) or underflows (`[1e-200, 0, 0]`) has
+/// none that can be computed: refused, as is the zero vector.
+fn unit_direction(given: Option<[f64; 3]>) -> Result<Vector3<f64>, String> {
+    let direction = Vector3::from(given.unwrap_or([1.0, 0.0, 0.0]));
+    let unit = direction / direction.norm();
+    if unit.iter().all(|c| c.is_finite()) && (unit.norm() - 1.0).abs() < 1e-9 {
+        return Ok(unit);
+    }
+    let components: Vec<String> = direction.iter().map(|&c| shown(c)).collect();
+    Err(format!(
+        "blank.reference_direction = [{}] has no direction that can be computed (its length \
+         is zero, not a number, or beyond what a number holds): give a non-zero vector of \
+         ordinary size, such as [1, 0, 0]",
+        components.join(", ")
+    ))
 }
 
 /// A node or element set of the blank's mesh held along some axes (a symmetry plane, a
@@ -509,14 +524,11 @@ impl Scenario {
     /// reaches over the holder, the stroke stays within the die. Checks that need the meshes
     /// (a blank or tools read from files) are made when the model is built.
     fn check(&self) -> Result<(), String> {
-        self.check_blank()?;
+        self.check_ranges()?;
         self.check_process()?;
         match &self.tools {
             ToolSet::BuiltIn(t) => self.check_built_in_tools(t)?,
             ToolSet::Files(f) => {
-                if let Some(r) = f.flange_radius {
-                    positive("tools.flange_radius", r)?;
-                }
                 if self.has_holder() && f.holder.is_none() {
                     return Err(
                         "process.blank_holder_force or blank_holder_gap needs a holder: give \
@@ -530,20 +542,37 @@ impl Scenario {
             boundary.set()?;
             boundary.mask()?;
         }
-        if let Some(angle) = self.output.locking_angle {
-            if !(angle.is_finite() && angle > 0.0 && angle < 90.0) {
-                return Err(format!(
-                    "output.locking_angle = {angle} must lie between 0 and 90 degrees"
-                ));
-            }
-        }
-        if self.output.history_points == 0 {
-            return Err("output.history_points must be at least 1".into());
-        }
         Ok(())
     }
 
-    fn check_blank(&self) -> Result<(), String> {
+    /// Every number of the scenario inside the range of its quantity (`crate::limits`, listed
+    /// in docs/forming.md), the first outside named by its key.
+    fn check_ranges(&self) -> Result<(), String> {
+        let (p, o) = (&self.process, &self.output);
+        let mut given = vec![
+            ("blank.ply_angle", Some(self.blank.ply_angle), ANGLE),
+            ("process.temperature", Some(p.temperature), TEMPERATURE),
+            ("process.stroke", Some(p.stroke), LENGTH),
+            ("process.punch_speed", Some(p.punch_speed), SPEED),
+            (
+                "process.blank_holder_force",
+                Some(p.blank_holder_force),
+                FORCE,
+            ),
+            ("process.blank_holder_gap", p.blank_holder_gap, GAP),
+            ("process.friction.punch", Some(p.friction.punch), FRICTION),
+            ("process.friction.die", Some(p.friction.die), FRICTION),
+            ("process.friction.holder", Some(p.friction.holder), FRICTION),
+            ("process.time_scaling", Some(p.time_scaling), TIME_SCALING),
+            ("process.target_time_step", p.target_time_step, TIME_STEP),
+            ("output.frames", Some(o.frames as f64), FRAMES),
+            (
+                "output.history_points",
+                Some(o.history_points as f64),
+                HISTORY_POINTS,
+            ),
+            ("output.locking_angle", o.locking_angle, SHEAR_ANGLE),
+        ];
         if let BlankShape::Rectangle {
             width,
             length,
@@ -551,14 +580,28 @@ impl Scenario {
             ..
         } = self.blank.shape
         {
-            positive("blank.width", width)?;
-            positive("blank.length", length)?;
-            positive("blank.element_size", element_size)?;
+            given.extend([
+                ("blank.width", Some(width), LENGTH),
+                ("blank.length", Some(length), LENGTH),
+                ("blank.element_size", Some(element_size), LENGTH),
+            ]);
         }
-        if !self.blank.ply_angle.is_finite() {
-            return Err("blank.ply_angle must be a number (degrees)".into());
+        match &self.tools {
+            ToolSet::BuiltIn(t) => given.extend([
+                ("tools.half_length", t.half_length, LENGTH),
+                ("tools.punch_radius", Some(t.punch_radius), LENGTH),
+                (
+                    "tools.die_opening_radius",
+                    Some(t.die_opening_radius),
+                    LENGTH,
+                ),
+                ("tools.die_fillet_radius", Some(t.die_fillet_radius), LENGTH),
+                ("tools.holder_inner_radius", t.holder_inner_radius, LENGTH),
+                ("tools.resolution", Some(t.resolution), LENGTH),
+            ]),
+            ToolSet::Files(f) => given.push(("tools.flange_radius", f.flange_radius, LENGTH)),
         }
-        Ok(())
+        check_given(given)
     }
 
     fn check_process(&self) -> Result<(), String> {
@@ -583,48 +626,12 @@ impl Scenario {
                     .into(),
             );
         }
-        positive("process.stroke", p.stroke)?;
-        positive("process.punch_speed", p.punch_speed)?;
-        if !(p.temperature.is_finite()) {
-            return Err("process.temperature must be a number".into());
-        }
-        if !(p.blank_holder_force.is_finite() && p.blank_holder_force >= 0.0) {
-            return Err(format!(
-                "process.blank_holder_force = {} must be >= 0 (N)",
-                p.blank_holder_force
-            ));
-        }
-        if let Some(gap) = p.blank_holder_gap {
-            if !(gap.is_finite() && gap >= 0.0) {
-                return Err(format!(
-                    "process.blank_holder_gap = {gap} must be >= 0 (mm)"
-                ));
-            }
-            if p.blank_holder_force > 0.0 {
-                return Err(
-                    "process.blank_holder_force and process.blank_holder_gap are two ways to \
-                     drive the holder: give one of them"
-                        .into(),
-                );
-            }
-        }
-        for (key, mu) in [
-            ("process.friction.punch", p.friction.punch),
-            ("process.friction.die", p.friction.die),
-            ("process.friction.holder", p.friction.holder),
-        ] {
-            if !(mu.is_finite() && mu >= 0.0) {
-                return Err(format!("{key} = {mu} must be >= 0"));
-            }
-        }
-        if !(p.time_scaling.is_finite() && p.time_scaling >= 1.0) {
-            return Err(format!(
-                "process.time_scaling = {} must be >= 1",
-                p.time_scaling
-            ));
-        }
-        if let Some(dt) = p.target_time_step {
-            positive("process.target_time_step", dt)?;
+        if p.blank_holder_gap.is_some() && p.blank_holder_force > 0.0 {
+            return Err(
+                "process.blank_holder_force and process.blank_holder_gap are two ways to drive \
+                 the holder: give one of them"
+                    .into(),
+            );
         }
         if let Some(travel) = p.max_increment {
             positive("process.max_increment", travel)?;
@@ -639,35 +646,32 @@ impl Scenario {
     }
 
     fn check_built_in_tools(&self, t: &Tools) -> Result<(), String> {
-        for (key, value) in [
-            ("tools.punch_radius", t.punch_radius),
-            ("tools.die_opening_radius", t.die_opening_radius),
-            ("tools.die_fillet_radius", t.die_fillet_radius),
-            ("tools.resolution", t.resolution),
-        ] {
-            positive(key, value)?;
-        }
         t.check_shape()?;
         if t.die_opening_radius <= t.punch_radius {
             return Err(format!(
                 "tools.die_opening_radius = {} must exceed tools.punch_radius = {} (plus the \
                  blank's thickness) for the punch to pass",
-                t.die_opening_radius, t.punch_radius
+                shown_apart(t.die_opening_radius, t.punch_radius),
+                shown(t.punch_radius)
             ));
         }
         let p = &self.process;
-        if p.stroke > 2.0 * t.punch_radius {
+        let punch_height = 2.0 * t.punch_radius;
+        if p.stroke > punch_height {
             return Err(format!(
-                "process.stroke = {} goes beyond the punch (radius {} with a skirt as tall)",
-                p.stroke, t.punch_radius
+                "process.stroke = {} mm goes beyond the punch (radius {} mm with a skirt as tall: \
+                 {} mm of stroke at most)",
+                shown_apart(p.stroke, punch_height),
+                shown(t.punch_radius),
+                shown(punch_height)
             ));
         }
         let holder = t.holder_inner_radius();
-        positive("tools.holder_inner_radius", holder)?;
         if holder <= t.punch_radius {
             return Err(format!(
-                "tools.holder_inner_radius = {holder} must exceed tools.punch_radius = {}",
-                t.punch_radius
+                "tools.holder_inner_radius = {} must exceed tools.punch_radius = {}",
+                shown_apart(holder, t.punch_radius),
+                shown(t.punch_radius)
             ));
         }
         if let BlankShape::Rectangle {
@@ -680,8 +684,12 @@ impl Scenario {
             let half_side = (0.5 * width - t.ridge_half_length()).min(0.5 * length);
             if self.has_holder() && half_side <= holder {
                 return Err(format!(
-                    "the blank ({width} x {length} mm) does not reach the blank holder (inner \
-                     radius {holder} mm): it cannot be held"
+                    "the blank ({} x {} mm) reaches {} mm from the punch's axis (ridge), not \
+                     over the blank holder (inner radius {} mm): it cannot be held",
+                    shown(width),
+                    shown(length),
+                    shown_apart(half_side, holder),
+                    shown(holder)
                 ));
             }
             t.check_element_size(element_size, "blank.element_size")?;
@@ -704,11 +712,14 @@ impl Tools {
 
     /// At least four elements of `size` across the punch radius; `what` names the size.
     pub fn check_element_size(&self, size: f64, what: &str) -> Result<(), String> {
-        if size > 0.25 * self.punch_radius {
+        let largest = 0.25 * self.punch_radius;
+        if size > largest {
             return Err(format!(
-                "{what} = {size:.3} mm is too coarse for a punch of radius {}: at least four \
-                 elements across the punch radius are needed",
-                self.punch_radius
+                "{what} = {} mm is too coarse for a punch of radius {} mm: at least four \
+                 elements across the punch radius are needed, {} mm at most",
+                shown_apart(size, largest),
+                shown(self.punch_radius),
+                shown(largest)
             ));
         }
         Ok(())
@@ -722,7 +733,7 @@ impl Tools {
                 "tools.half_length is for tools.shape = \"double-dome\"; a hemisphere has none"
                     .into(),
             ),
-            ("double-dome", Some(l)) => positive("tools.half_length", l),
+            ("double-dome", Some(_)) => Ok(()),
             ("double-dome", None) => Err(
                 "tools.half_length (the half-length of the ridge, mm) is needed for tools.shape \
                  = \"double-dome\""
@@ -733,14 +744,6 @@ impl Tools {
                  \"double-dome\" and \"files\""
             )),
         }
-    }
-}
-
-fn positive(key: &str, value: f64) -> Result<(), String> {
-    if value.is_finite() && value > 0.0 {
-        Ok(())
-    } else {
-        Err(format!("{key} = {value} must be a positive number"))
     }
 }
 

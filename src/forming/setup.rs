@@ -6,6 +6,7 @@
 //! is moved off the mid-plane by half the blank's thickness, so that it touches a face of the
 //! blank at the start; tools read from files are used where the files put them.
 
+use super::export::FORMED_INP;
 use super::preflight;
 use super::scenario::{BlankShape, Scenario, SetKind, ToolFile, ToolFiles, ToolSet, Tools};
 use crate::contact::{
@@ -14,7 +15,9 @@ use crate::contact::{
     ContactSettings, DieShape, Facing, RigidTool, SweptProfile, ToolMotion, TriangleSurface,
 };
 use crate::experiment::sheet_test::Crosshead;
+use crate::limits::{shown, shown_apart};
 use crate::material::MaterialCard;
+use crate::mesh::abaqus::check_set_names;
 use crate::mesh::orientation::{describe_poor_projections, poor_projections, reference_warp};
 use crate::mesh::{read_mesh_file, rectangle, DiagonalPattern, Mesh};
 use crate::solver::estimate::RunEstimate;
@@ -106,6 +109,7 @@ impl FormingModel {
             mesh.cells.len(),
         ));
         let constraints = boundary_constraints(s, &mesh)?;
+        preflight::check_holder_pressure(s, mesh.total_area())?;
         let blank_mass = card.density * thickness * mesh.total_area();
         let p = &s.process;
         let mut model = Model::new(
@@ -262,6 +266,14 @@ pub fn blank_mesh(s: &Scenario) -> Result<(Mesh, Vec<String>), String> {
                      blank.element_set, or read rigid elements as a tool)"
                 ));
             }
+            // the formed blank's deck, written at the end of the run, carries the mesh's sets:
+            // a name it cannot write is refused now rather than after the whole stroke
+            check_set_names(&mesh).map_err(|e| {
+                format!(
+                    "{file}: {e}; the formed blank ({FORMED_INP}) keeps the mesh's sets (its \
+                     physical groups, *NSET and *ELSET) by name: rename it in the file"
+                )
+            })?;
             Ok((mesh, notes))
         }
     }
@@ -279,22 +291,25 @@ fn check_built_in_fit(
     let clearance = t.die_opening_radius - t.punch_radius;
     if clearance < thickness {
         return Err(format!(
-            "{}: the die opening leaves {clearance} mm around the punch, less than the ply's \
-             {thickness} mm",
-            s.origin
+            "{}: the die opening leaves {} mm around the punch, less than the ply's {} mm",
+            s.origin,
+            shown_apart(clearance, thickness),
+            shown(thickness)
         ));
     }
     if let BlankShape::File { mesh: file, .. } = &s.blank.shape {
         let what = format!("the element size of {}", file.display());
         t.check_element_size(element_size, &what)
             .map_err(|e| format!("{}: {e}", s.origin))?;
-        if s.has_holder() && reach <= t.holder_inner_radius() {
+        let holder = t.holder_inner_radius();
+        if s.has_holder() && reach <= holder {
             return Err(format!(
-                "{}: the blank of {} reaches {reach:.1} mm from the punch axis, not over the \
-                 blank holder (inner radius {} mm): it cannot be held",
+                "{}: the blank of {} reaches {} mm from the punch axis, not over the blank \
+                 holder (inner radius {} mm): it cannot be held",
                 s.origin,
                 file.display(),
-                t.holder_inner_radius()
+                shown_apart(reach, holder),
+                shown(holder)
             ));
         }
     }
@@ -566,13 +581,14 @@ fn read_tool_file(tool: &ToolFile) -> Result<TriangleSurface, String> {
 /// The punch must be at least as tall as the stroke, or the blank would be pushed by nothing.
 fn check_stroke(s: &Scenario, punch: &TriangleSurface, file: &Path) -> Result<(), String> {
     let (lo, hi) = punch.bounds();
-    if s.process.stroke > hi.z - lo.z {
+    let height = hi.z - lo.z;
+    if s.process.stroke > height {
         return Err(format!(
-            "{}: process.stroke = {} mm is more than the height of the punch of {} ({:.1} mm)",
+            "{}: process.stroke = {} mm is more than the height of the punch of {} ({} mm)",
             s.origin,
-            s.process.stroke,
+            shown_apart(s.process.stroke, height),
             file.display(),
-            hi.z - lo.z
+            shown_apart(height, s.process.stroke)
         ));
     }
     Ok(())

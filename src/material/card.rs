@@ -10,6 +10,10 @@ use super::{
 };
 use crate::element::BendingRigidity;
 use crate::io::from_toml_text;
+use crate::limits::{
+    between, shown, shown_apart, Range, BENDING_RIGIDITY, COMPLIANCE, DENSITY, FRACTION,
+    FRICTION_ONSET, SHEAR_ANGLE, STIFFNESS, TEMPERATURE, THICKNESS, VISCOSITY,
+};
 use serde::Deserialize;
 use std::path::Path;
 use std::sync::Arc;
@@ -103,18 +107,14 @@ impl BendingSection {
         let key = |name: &str| format!("[bending] {name}");
         match (self.temperature, self.warp, self.weft) {
             (None, NumberOrList::Number(warp), NumberOrList::Number(weft)) => {
-                let rigidity = BendingRigidity { warp, weft };
-                rigidity.validate().map_err(|e| format!("[bending] {e}"))?;
-                Ok(BendingCard::Constant(rigidity))
+                BENDING_RIGIDITY.check("[bending] warp", warp)?;
+                BENDING_RIGIDITY.check("[bending] weft", weft)?;
+                Ok(BendingCard::Constant(BendingRigidity { warp, weft }))
             }
             (Some(temperatures), NumberOrList::List(warp), NumberOrList::List(weft)) => {
-                for (name, values) in [("warp", &warp), ("weft", &weft)] {
-                    if let Some(v) = values.iter().find(|v| !(v.is_finite() && **v >= 0.0)) {
-                        return Err(format!(
-                            "[bending] {name} has {v}: bending rigidities are numbers >= 0 (N·mm)"
-                        ));
-                    }
-                }
+                TEMPERATURE.check_each("[bending] temperature", &temperatures)?;
+                BENDING_RIGIDITY.check_each("[bending] warp", &warp)?;
+                BENDING_RIGIDITY.check_each("[bending] weft", &weft)?;
                 Ok(BendingCard::Table {
                     warp: TemperatureTable::new(key("warp"), temperatures.clone(), warp)?,
                     weft: TemperatureTable::new(key("weft"), temperatures, weft)?,
@@ -217,12 +217,19 @@ impl MaterialCard {
 
     /// Whether the card's tables cover `temperature` (°C), which `key` (a scenario key or a
     /// command-line option) gave: the run is refused before it starts rather than stopped by
-    /// its first element.
+    /// its first element. A temperature within a rounding error of a table's end is at the end
+    /// (`limits::ROUNDING`), as the tables themselves take it.
     pub fn check_temperature(&self, key: &str, temperature: f64) -> Result<(), String> {
         match self.temperature_range() {
-            Some((lo, hi)) if !(lo..=hi).contains(&temperature) => Err(format!(
-                "{key} = {temperature} °C is outside the card's tables ({lo} to {hi} °C): choose                  a temperature inside them, or extend the tables of the card"
-            )),
+            Some((lo, hi)) if !between(temperature, lo, hi) => {
+                let nearest = if temperature < lo { lo } else { hi };
+                Err(format!(
+                    "{key} = {} °C is outside the card's tables ({}): choose a temperature \
+                     inside them, or extend the tables of the card",
+                    shown_apart(temperature, nearest),
+                    describe_tables(self.matrix.as_deref(), self.bending.as_ref())
+                ))
+            }
             _ => Ok(()),
         }
     }
@@ -238,12 +245,52 @@ impl MaterialCard {
     }
 }
 
-fn positive(key: &str, value: f64) -> Result<f64, String> {
-    if value.is_finite() && value > 0.0 {
-        Ok(value)
-    } else {
-        Err(format!("{key} = {value}: must be a positive number"))
+/// The temperatures each of the card's tables covers, for messages: `[matrix] temperature
+/// 280 to 320 °C and [bending] temperature 250 °C`.
+fn describe_tables(
+    matrix: Option<&ViscoHyperelasticMatrix>,
+    bending: Option<&BendingCard>,
+) -> String {
+    let span = |(lo, hi): (f64, f64)| {
+        if lo == hi {
+            format!("{} °C", shown(lo))
+        } else {
+            format!("{} to {} °C", shown(lo), shown(hi))
+        }
+    };
+    let tables: Vec<String> = [
+        (
+            "[matrix]",
+            matrix.map(ViscoHyperelasticMatrix::parameters_range),
+        ),
+        ("[bending]", bending.and_then(BendingCard::range)),
+    ]
+    .into_iter()
+    .filter_map(|(section, range)| Some(format!("{section} temperature {}", span(range?))))
+    .collect();
+    tables.join(" and ")
+}
+
+/// The matrix's and the bending's tables must share a temperature, or the card holds at none.
+fn check_tables_overlap(
+    matrix: Option<&ViscoHyperelasticMatrix>,
+    bending: Option<&BendingCard>,
+) -> Result<(), String> {
+    let (Some((a, b)), Some((c, d))) = (
+        matrix.map(ViscoHyperelasticMatrix::parameters_range),
+        bending.and_then(BendingCard::range),
+    ) else {
+        return Ok(());
+    };
+    let (lo, hi) = (a.max(c), b.min(d));
+    if lo <= hi || between(lo, hi, hi) {
+        return Ok(());
     }
+    Err(format!(
+        "the tables do not overlap ({}): the card holds at no temperature; give [bending] \
+         rigidities at temperatures of the [matrix] table",
+        describe_tables(matrix, bending)
+    ))
 }
 
 fn all_finite(key: &str, values: &[f64]) -> Result<(), String> {
@@ -258,7 +305,7 @@ impl CardFile {
         if self.name.trim().is_empty() {
             return Err("name must not be empty".into());
         }
-        let density = positive("density", self.density)?;
+        DENSITY.check("density", self.density)?;
         let matrix = self
             .matrix
             .map(MatrixSection::check)
@@ -267,9 +314,10 @@ impl CardFile {
         let fabric = Arc::new(self.fabric.check()?);
         let laminate = self.layers.check(matrix.clone(), fabric.clone())?;
         let bending = self.bending.map(BendingSection::check).transpose()?;
+        check_tables_overlap(matrix.as_deref(), bending.as_ref())?;
         Ok(MaterialCard {
             name: self.name,
-            density,
+            density: self.density,
             matrix,
             fabric,
             laminate,
@@ -284,7 +332,8 @@ impl LayersSection {
         matrix: Option<Arc<ViscoHyperelasticMatrix>>,
         fabric: Arc<WovenFabric>,
     ) -> Result<Laminate, String> {
-        let t_b = positive("[layers] fabric_thickness", self.fabric_thickness)?;
+        let t_b = self.fabric_thickness;
+        THICKNESS.check("[layers] fabric_thickness", t_b)?;
         if !self.stack.contains(&LayerKind::Fabric) {
             return Err("[layers] stack must contain at least one \"fabric\" layer".into());
         }
@@ -299,10 +348,10 @@ impl LayersSection {
                 let thickness = self
                     .matrix_thickness
                     .ok_or("[layers] matrix_thickness is missing")?;
-                let t_a = positive("[layers] matrix_thickness", thickness)?;
+                THICKNESS.check("[layers] matrix_thickness", thickness)?;
                 Some(Layer {
                     law: law as Arc<dyn MaterialLaw>,
-                    thickness: t_a,
+                    thickness,
                 })
             }
         };
@@ -330,22 +379,10 @@ impl MatrixSection {
         let c10 = table("c10", self.c10)?;
         let d1 = table("d1", self.d1)?;
         let eta1 = table("eta1", self.eta1)?;
-        for (key, values, allow_zero) in [
-            ("c10", c10.values(), false),
-            ("d1", d1.values(), false),
-            ("eta1", eta1.values(), true),
-        ] {
-            if let Some(i) = values
-                .iter()
-                .position(|&v| v < 0.0 || (v == 0.0 && !allow_zero))
-            {
-                let need = if allow_zero { ">= 0" } else { "> 0" };
-                return Err(format!(
-                    "[matrix] {key}[{i}] = {}: must be {need}",
-                    values[i]
-                ));
-            }
-        }
+        TEMPERATURE.check_each("[matrix] temperature", &self.temperature)?;
+        STIFFNESS.check_each("[matrix] c10", c10.values())?;
+        COMPLIANCE.check_each("[matrix] d1", d1.values())?;
+        VISCOSITY.check_each("[matrix] eta1", eta1.values())?;
         Ok(ViscoHyperelasticMatrix::new(c10, d1, eta1))
     }
 }
@@ -353,26 +390,33 @@ impl MatrixSection {
 impl FabricSection {
     fn check(self) -> Result<WovenFabric, String> {
         let f = self.compression_fraction;
-        if !(f.is_finite() && (0.0..=1.0).contains(&f)) {
-            return Err(format!(
-                "[fabric] compression_fraction = {f}: must lie in [0, 1]"
-            ));
-        }
+        FRACTION.check("[fabric] compression_fraction", f)?;
         let shear = self.shear_law()?;
         let warp = yarn("[fabric] warp_tension", self.warp_tension, f)?;
         let weft = yarn("[fabric] weft_tension", self.weft_tension, f)?;
-        // A falling shear energy would be a negative shear stiffness: unstable in any solver.
-        for deg in (0..=SHEAR_CHECK_LIMIT_DEG).map(f64::from) {
-            let i10 = deg.to_radians().sin().powi(2);
-            if shear.derivative(i10) < 0.0 {
-                return Err(format!(
-                    "[fabric] shear: the shear energy decreases at {deg}° of shear \
-                     (W_s'(I10) < 0); the coefficients give a negative shear stiffness"
-                ));
-            }
-        }
+        check_shear_stress(&shear)?;
         Ok(WovenFabric::new(warp, weft, shear))
     }
+}
+
+/// The shear law's stress `W_s'(I10)` at every whole degree up to [`SHEAR_CHECK_LIMIT_DEG`],
+/// as far as a forming run shears: never negative (a falling shear energy is a negative shear
+/// stiffness, unstable in any solver) and never beyond [`STIFFNESS`] (a high power fitted to
+/// a few points can reach 1e18 MPa there).
+fn check_shear_stress(shear: &ShearInteraction) -> Result<(), String> {
+    for deg in (0..=SHEAR_CHECK_LIMIT_DEG).map(f64::from) {
+        let stress = shear.derivative(deg.to_radians().sin().powi(2));
+        if stress < 0.0 {
+            return Err(format!(
+                "[fabric] shear: the shear energy decreases at {deg}° of shear (W_s'(I10) < 0; \
+                 a card's law is checked up to {SHEAR_CHECK_LIMIT_DEG}°): the coefficients give a \
+                 negative shear stiffness"
+            ));
+        }
+        let key = format!("[fabric] shear: W_s'(I10) at {deg}° of shear");
+        STIFFNESS.from_zero().check(&key, stress)?;
+    }
+    Ok(())
 }
 
 impl FabricSection {
@@ -384,27 +428,19 @@ impl FabricSection {
         let mut terms: Vec<(ShearTerm, f64)> =
             ShearInteraction::new(self.shear.clone()).terms().to_vec();
         let non_negative = |key: &str, v: f64| {
-            if v.is_finite() && v >= 0.0 {
-                Ok(v)
-            } else {
-                Err(format!("[fabric] {key} = {v}: must be a number >= 0 (MPa)"))
-            }
+            STIFFNESS.from_zero().check(&format!("[fabric] {key}"), v)?;
+            Ok::<_, String>(v)
         };
-        let angle = |key: &str, v: f64, (lo, hi): (f64, f64)| {
-            if v.is_finite() && v > lo && v < hi {
-                Ok(v.to_radians())
-            } else {
-                Err(format!(
-                    "[fabric] {key} = {v}: must be an angle between {lo} and {hi} degrees"
-                ))
-            }
+        let angle = |key: &str, v: f64, range: Range| {
+            range.check(&format!("[fabric] {key}"), v)?;
+            Ok::<_, String>(v.to_radians())
         };
         match (self.shear_friction, self.shear_friction_onset) {
             (Some(k0), onset) => {
                 let onset = onset.unwrap_or(DEFAULT_FRICTION_ONSET_DEG);
                 terms.push((
                     ShearTerm::Friction {
-                        onset: angle("shear_friction_onset", onset, (0.0, 15.0))?,
+                        onset: angle("shear_friction_onset", onset, FRICTION_ONSET)?,
                     },
                     non_negative("shear_friction", k0)?,
                 ));
@@ -417,7 +453,7 @@ impl FabricSection {
         match (self.shear_locking, self.shear_locking_angle) {
             (Some(kl), Some(a)) => terms.push((
                 ShearTerm::Locking {
-                    angle: angle("shear_locking_angle", a, (0.0, 90.0))?,
+                    angle: angle("shear_locking_angle", a, SHEAR_ANGLE)?,
                 },
                 non_negative("shear_locking", kl)?,
             )),
@@ -448,15 +484,11 @@ fn yarn(
     compression_fraction: f64,
 ) -> Result<YarnTension, String> {
     all_finite(key, &coefficients)?;
-    match coefficients.first() {
-        None => return Err(format!("{key} needs at least one coefficient A2")),
-        Some(&a2) if a2 <= 0.0 => {
-            return Err(format!(
-                "{key}[0] (A2) = {a2}: must be > 0, it is the initial tensile modulus of the yarns"
-            ))
-        }
-        _ => {}
-    }
+    let Some(&a2) = coefficients.first() else {
+        return Err(format!("{key} needs at least one coefficient A2"));
+    };
+    // A2 is the yarns' initial tensile modulus
+    STIFFNESS.check(&format!("{key}[0] (A2)"), a2)?;
     let tension = YarnTension::new(coefficients, compression_fraction);
     for i in 1..=50 {
         let stretch = 1.0 + TENSION_CHECK_STRAIN * f64::from(i) / 50.0;
@@ -467,6 +499,15 @@ fn yarn(
             ));
         }
     }
+    // the higher A_k, small strains' coefficients, are bounded through the modulus they give
+    let stretch = 1.0 + TENSION_CHECK_STRAIN;
+    let secant = format!(
+        "{key}: the yarns' secant modulus at {} % strain",
+        100.0 * TENSION_CHECK_STRAIN
+    );
+    STIFFNESS
+        .from_zero()
+        .check(&secant, tension.tension(stretch) / TENSION_CHECK_STRAIN)?;
     Ok(tension)
 }
 
@@ -635,7 +676,7 @@ shear = [0.25, 0.0, 2.0]
             }))
         );
         let negative = with.replace("weft = 0.5", "weft = -0.5");
-        assert!(error_of(&negative).contains("[bending] bending rigidity weft"));
+        assert!(error_of(&negative).contains("[bending] weft = -0.5 N·mm"));
         let unknown = with.replace("weft = 0.5", "weft = 0.5\ntwist = 1.0");
         assert!(error_of(&unknown).contains("twist"));
     }
@@ -662,7 +703,7 @@ shear = [0.25, 0.0, 2.0]
             (
                 "warp = [2.0, 1.0]",
                 "warp = [2.0, -1.0]",
-                "[bending] warp has -1",
+                "[bending] warp[1] = -1 N·mm",
             ),
             (
                 "temperature = [290.0, 310.0]\n",
@@ -672,6 +713,98 @@ shear = [0.25, 0.0, 2.0]
         ] {
             let e = error_of(&with.replace(from, to));
             assert!(e.contains(expected), "{to}: {e}");
+        }
+    }
+
+    /// A bending table that shares no temperature with the matrix's is refused when the card is
+    /// read, naming both tables, instead of a range printed backwards ("280 to 250 °C") when
+    /// the card is used.
+    #[test]
+    fn tables_that_do_not_overlap_are_refused_naming_both() {
+        let with =
+            format!("{VALID}\n[bending]\ntemperature = [250.0]\nwarp = [2.0]\nweft = [1.0]\n");
+        let e = error_of(&with);
+        assert!(e.starts_with("card.toml: the tables do not overlap"), "{e}");
+        assert!(
+            e.contains("[matrix] temperature 280 to 320 °C and [bending] temperature 250 °C"),
+            "{e}"
+        );
+        let touching = with.replace("[250.0]", "[320.0]");
+        assert!(MaterialCard::from_toml(&touching, "card.toml").is_ok());
+    }
+
+    /// A temperature a rounding error past a table's end is at the end; one further out is
+    /// refused with the digits that show it, and the tables' ranges.
+    #[test]
+    fn temperatures_at_the_tables_ends_hold_within_rounding() {
+        let card = MaterialCard::from_toml(VALID, "card.toml").unwrap();
+        card.check_temperature("process.temperature", 320.000_000_000_1)
+            .unwrap();
+        let e = card
+            .check_temperature("process.temperature", 320.000_000_412_345_7)
+            .unwrap_err();
+        assert!(
+            e.starts_with(
+                "process.temperature = 320.0000004 °C is outside the card's tables \
+                 ([matrix] temperature 280 to 320 °C)"
+            ),
+            "{e}"
+        );
+    }
+
+    /// Every number of a card within its quantity's range (`crate::limits`), named by its key.
+    #[test]
+    fn values_nobody_means_are_refused_naming_the_key() {
+        for (from, to, expected) in [
+            (
+                "density = 1.5e-9",
+                "density = 1.5e300",
+                "density = 1.5e300 tonne/mm^3",
+            ),
+            (
+                "fabric_thickness = 0.23",
+                "fabric_thickness = 1e9",
+                "[layers] fabric_thickness",
+            ),
+            (
+                "temperature = [280.0, 320.0]",
+                "temperature = [280.0, 1e300]",
+                "[matrix] temperature[1]",
+            ),
+            (
+                "c10 = [0.05, 0.02]",
+                "c10 = [0.05, 1e300]",
+                "[matrix] c10[1]",
+            ),
+            (
+                "eta1 = [1e-3, 5e-4]",
+                "eta1 = [1e-3, 1e300]",
+                "[matrix] eta1[1]",
+            ),
+            (
+                "warp_tension = [4e4, 2e6]",
+                "warp_tension = [4e300, 2e6]",
+                "warp_tension[0] (A2) = 4e300 MPa",
+            ),
+            (
+                "weft_tension = [4e4, 2e6]",
+                "weft_tension = [4e4, 2e12]",
+                "weft_tension: the yarns' secant modulus at 5 % strain",
+            ),
+            (
+                "shear = [0.25, 0.0, 2.0]",
+                "shear = [0.25, 0.0, 2e20]",
+                "W_s'(I10) at 1° of shear",
+            ),
+            (
+                "shear = [0.25, 0.0, 2.0]",
+                "shear = [0.25]\ncompression_fraction = 2.0",
+                "compression_fraction = 2",
+            ),
+        ] {
+            let e = error_of(&VALID.replace(from, to));
+            assert!(e.contains(expected), "{to}: {e}");
+            assert!(e.contains("out of range"), "{to}: {e}");
         }
     }
 

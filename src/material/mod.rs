@@ -212,12 +212,22 @@ pub fn cauchy_stress(f: &Matrix3<f64>, s: &Matrix3<f64>) -> Matrix3<f64> {
     f * s * f.transpose() / f.determinant()
 }
 
+/// `temperature`, outside the table from `min` to `max`, with the digits that tell it from the
+/// end it passed.
+fn beyond(temperature: &f64, min: &f64, max: &f64) -> String {
+    let nearest = if temperature < min { *min } else { *max };
+    crate::limits::shown_apart(*temperature, nearest)
+}
+
 /// Why a material law could not produce a stress.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum MaterialError {
     #[error(
-        "temperature {temperature} °C is outside the table of {quantity} ({min} to {max} °C); \
-         extend the table in the material card"
+        "temperature {} °C is outside the table of {quantity} ({} to {} °C); extend the table \
+         in the material card",
+        beyond(.temperature, .min, .max),
+        crate::limits::shown(*.min),
+        crate::limits::shown(*.max)
     )]
     TemperatureOutOfRange {
         quantity: String,

@@ -1,10 +1,7 @@
 //! Temperature-dependent parameters as piecewise-linear tables (docs/model.md §2, (choice)).
 
 use super::MaterialError;
-
-/// Points closer than this to a table end (°C) count as inside, so that a temperature
-/// printed with a few digits still hits the end value.
-const END_TOLERANCE: f64 = 1e-9;
+use crate::limits::between;
 
 /// A parameter given at increasing temperatures, interpolated linearly in between.
 ///
@@ -78,18 +75,16 @@ impl TemperatureTable {
         )
     }
 
-    /// The value at `temperature`, interpolated linearly between table points.
+    /// The value at `temperature`, interpolated linearly between table points; a temperature
+    /// within a rounding error of an end (`limits::ROUNDING`, relative) is at the end, so that
+    /// one printed with a digit too many still hits the end value.
     pub fn at(&self, temperature: f64) -> Result<f64, MaterialError> {
-        if self.temperatures.len() == 1 {
-            let t0 = self.temperatures[0];
-            if (temperature - t0).abs() <= END_TOLERANCE {
-                return Ok(self.values[0]);
-            }
+        let (lo, hi) = self.range();
+        if !between(temperature, lo, hi) {
             return Err(self.out_of_range(temperature));
         }
-        let (lo, hi) = self.range();
-        if !(temperature >= lo - END_TOLERANCE && temperature <= hi + END_TOLERANCE) {
-            return Err(self.out_of_range(temperature));
+        if self.temperatures.len() == 1 {
+            return Ok(self.values[0]);
         }
         let t = temperature.clamp(lo, hi);
         let upper = self
@@ -134,11 +129,26 @@ mod tests {
     #[test]
     fn refuses_temperatures_outside_the_table() {
         let t = table();
-        for temp in [279.0, 320.5, f64::NAN] {
+        for temp in [279.0, 320.5, 320.000_001, f64::NAN] {
             let err = t.at(temp).unwrap_err();
             assert!(matches!(err, MaterialError::TemperatureOutOfRange { .. }));
             assert!(err.to_string().contains("c10"), "{err}");
         }
+    }
+
+    /// 320.0000000001 °C is the table's end written with a digit too many: at the end, not
+    /// outside; a refusal shows the digits that put a temperature outside.
+    #[test]
+    fn ends_hold_within_a_rounding_error_and_refusals_show_why() {
+        let t = table();
+        assert_eq!(t.at(320.000_000_000_1).unwrap(), 0.5);
+        assert_eq!(t.at(279.999_999_999_9).unwrap(), 3.0);
+        let e = t.at(320.000_000_412_345_7).unwrap_err().to_string();
+        assert!(
+            e.starts_with("temperature 320.0000004 °C is outside"),
+            "{e}"
+        );
+        assert!(e.contains("(280 to 320 °C)"), "{e}");
     }
 
     #[test]

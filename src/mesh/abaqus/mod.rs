@@ -12,8 +12,8 @@ mod writer;
 pub use lexer::IncludeReader;
 pub use reader::ELEMENT_TYPES;
 pub use writer::{
-    abaqus_number, write_inp, write_inp_to, ElementOutput, MATERIAL_NAME, MAX_FIELD,
-    ORIENTATION_PREFIX, SECTION_SET_PREFIX,
+    abaqus_number, check_set_names, write_inp, write_inp_to, ElementOutput, MATERIAL_NAME,
+    MAX_FIELD, ORIENTATION_PREFIX, SECTION_SET_PREFIX,
 };
 
 use super::{MeshFileError, MeshImport};

@@ -138,12 +138,7 @@ pub fn write_inp_to<W: Write>(
     let node_sets = names(&mesh.node_sets, "node").map_err(error)?;
     let element_sets = names(&mesh.element_sets, "element").map_err(error)?;
     let with_sections = warp.is_some() || thickness.is_some();
-    if let Some(name) = mesh.element_sets.keys().find(|n| is_section_set(n)) {
-        return Err(error(format!(
-            "element set '{name}' has the name of the per-element section sets \
-             ({SECTION_SET_PREFIX}<n>), which the reader does not keep"
-        )));
-    }
+    no_section_set_names(mesh).map_err(error)?;
 
     let mut text = String::new();
     let count_nodes = mesh.nodes.len();
@@ -272,6 +267,25 @@ fn write_labels(text: &mut String, members: &[usize]) {
     }
 }
 
+/// Whether [`write_inp`] can write the sets of `mesh`: the reason of the first it cannot, so
+/// that a run whose formed blank is written at its end refuses such a mesh when it reads it.
+pub fn check_set_names(mesh: &Mesh) -> Result<(), String> {
+    names(&mesh.node_sets, "node")?;
+    names(&mesh.element_sets, "element")?;
+    no_section_set_names(mesh)
+}
+
+/// No element set may take the name of a per-element section set of the writer.
+fn no_section_set_names(mesh: &Mesh) -> Result<(), String> {
+    match mesh.element_sets.keys().find(|n| is_section_set(n)) {
+        Some(name) => Err(format!(
+            "element set '{name}' has the name of the per-element section sets \
+             ({SECTION_SET_PREFIX}<n>), which the reader does not keep"
+        )),
+        None => Ok(()),
+    }
+}
+
 /// The sets' names as Abaqus labels (quoted where they are not plain names), by the mesh's
 /// name; names that Abaqus would take for the same (it ignores case) or cannot hold are
 /// refused.
@@ -295,7 +309,8 @@ fn names<'m>(
             format!("\"{name}\"")
         } else {
             return Err(format!(
-                "{kind} set name '{name}' cannot be written as an Abaqus label"
+                "{kind} set name '{name}' cannot be written as an Abaqus label (a label holds \
+                 no comma, double quote or line break, and no space at either end)"
             ));
         };
         if name.chars().count() > 80 {
