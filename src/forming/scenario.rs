@@ -565,6 +565,7 @@ impl Scenario {
             ("process.friction.holder", Some(p.friction.holder), FRICTION),
             ("process.time_scaling", Some(p.time_scaling), TIME_SCALING),
             ("process.target_time_step", p.target_time_step, TIME_STEP),
+            ("process.max_increment", p.max_increment, LENGTH),
             ("output.frames", Some(o.frames as f64), FRAMES),
             (
                 "output.history_points",
@@ -634,7 +635,6 @@ impl Scenario {
             );
         }
         if let Some(travel) = p.max_increment {
-            positive("process.max_increment", travel)?;
             if travel > p.stroke {
                 return Err(format!(
                     "process.max_increment = {travel} mm exceeds the stroke, {} mm",
