@@ -331,29 +331,42 @@ fn output_under_a_regular_file_is_refused_naming_it() {
     assert_eq!(stderr.lines().count(), 1, "{stderr}");
 }
 
-/// A full disk (`/dev/full` behind the history, or behind the second frame's temporary file):
-/// exit 2, the file named, no temporary file left.
+/// Results that cannot be written stop the run with exit 2, naming the file: a frame larger
+/// than the files the process may write (`RLIMIT_FSIZE` below a frame's size and above the
+/// plots', as a disk that fills up while the frame is written) leaves no temporary file and
+/// keeps the rows before it; a history that cannot be created (a folder in its place) stops
+/// the run before its first step. (Results are never written through a symbolic link, so a
+/// link to `/dev/full` is no way to fill the disk.)
 #[test]
-fn full_disk_stops_the_run_with_exit_2_naming_the_file() {
-    let dir = out_dir("safety-full-csv");
-    std::fs::create_dir_all(&dir).unwrap();
-    std::os::unix::fs::symlink("/dev/full", dir.join("forming.csv")).unwrap();
-    let out = run_to_end(&short_forming_run(&dir));
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "{stderr}");
-    assert!(
-        stderr.contains("forming.csv: No space left on device"),
-        "{stderr}"
-    );
-
+fn results_that_cannot_be_written_stop_the_run_with_exit_2_naming_the_file() {
+    use std::os::unix::process::CommandExt;
     let dir = out_dir("safety-full-frame");
-    std::fs::create_dir_all(&dir).unwrap();
-    std::os::unix::fs::symlink("/dev/full", dir.join("forming_0001.vtu.tmp")).unwrap();
-    let out = run_to_end(&short_forming_run(&dir));
+    // frames of these 10 mm cells are 114 kB, the force plot 48 kB
+    const LIMIT: libc::rlim_t = 80_000;
+    let mut command = Command::new(env!("CARGO_BIN_EXE_thermostamp"));
+    command
+        .args(short_forming_run(&dir))
+        .current_dir(env!("CARGO_MANIFEST_DIR"));
+    // SAFETY: between fork and exec the child only ignores a signal and lowers its own limit,
+    // both async-signal-safe calls that touch no memory of the parent
+    unsafe {
+        command.pre_exec(|| {
+            libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
+            let limit = libc::rlimit {
+                rlim_cur: LIMIT,
+                rlim_max: LIMIT,
+            };
+            match libc::setrlimit(libc::RLIMIT_FSIZE, &limit) {
+                0 => Ok(()),
+                _ => Err(std::io::Error::last_os_error()),
+            }
+        });
+    }
+    let out = command.output().unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{stderr}");
     assert!(
-        stderr.contains("forming_0001.vtu: cannot write the file: No space left on device"),
+        stderr.contains("forming_0000.vtu: cannot write the file: File too large"),
         "{stderr}"
     );
     assert!(
@@ -361,7 +374,21 @@ fn full_disk_stops_the_run_with_exit_2_naming_the_file() {
         "{:?}",
         temporary_files(&dir)
     );
-    assert!(!dir.join("forming_0001.vtu").exists());
+    assert!(!dir.join("forming_0000.vtu").exists());
     // the rows before the failed frame are kept
     assert!(!parsed_rows(&dir.join("forming.csv")).is_empty());
+
+    let dir = out_dir("safety-csv-folder");
+    std::fs::create_dir_all(dir.join("forming.csv")).unwrap();
+    let out = run_to_end(&short_forming_run(&dir));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains(&format!(
+            "cannot write {}: Is a directory",
+            dir.join("forming.csv").display()
+        )),
+        "{stderr}"
+    );
+    assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
 }

@@ -62,8 +62,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         Some((x, y)) => anyhow::anyhow!("drape from --start {x},{y}: {e}"),
         None => anyhow::anyhow!("drape: {e}"),
     })?;
-    std::fs::create_dir_all(&dir)
-        .with_context(|| format!("cannot create the output folder {}", dir.display()))?;
+    crate::io::output_folder::create_folder(&dir)?;
     let csv = write_cells(&dir, &net)?;
     let vtu = write_net(&dir, &net)?;
     let report = net.report();
@@ -92,7 +91,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
 /// `drape.csv`: index, centre and shear angle of every cell.
 fn write_cells(dir: &Path, net: &DrapeResult) -> anyhow::Result<PathBuf> {
     let path = dir.join("drape.csv");
-    let file = std::fs::File::create(&path)
+    let file = crate::io::product_file::create(&path)
         .with_context(|| format!("cannot create {}", path.display()))?;
     let rows = net.cells().into_iter().map(|c| {
         [

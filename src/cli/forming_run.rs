@@ -222,9 +222,9 @@ fn write_result_row(
         .chain(values.into_iter().map(number))
         .collect();
     let path = dir.join(RESULT_CSV);
-    std::fs::write(
+    crate::io::product_file::write(
         &path,
-        format!("{}\n{}\n", RESULT_COLUMNS.join(","), row.join(",")),
+        format!("{}\n{}\n", RESULT_COLUMNS.join(","), row.join(",")).as_bytes(),
     )
     .with_context(|| format!("cannot write {}", path.display()))?;
     Ok(path)

@@ -120,8 +120,12 @@ impl Progress for Watch<'_> {
 /// Locks `dir` for this run and clears an earlier run's `products` there (see
 /// [`take_folder`]); the lock file records this process's command line.
 pub fn take_output_folder(dir: &Path, products: &ProductFiles) -> anyhow::Result<FolderLock> {
-    let command: Vec<String> = std::env::args().collect();
-    Ok(take_folder(dir, &command.join(" "), products)?)
+    Ok(take_folder(dir, &command_line(), products)?)
+}
+
+/// This process's command line, as a lock file records it.
+pub fn command_line() -> String {
+    std::env::args().collect::<Vec<_>>().join(" ")
 }
 
 /// The summary's line on how the run ended.

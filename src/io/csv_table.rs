@@ -206,13 +206,14 @@ pub struct WriteError {
 }
 
 impl CsvStream {
-    /// Creates (or empties) `path` and writes `header` into it.
+    /// Creates (or empties) `path` and writes `header` into it; a symbolic link at `path` is
+    /// refused ([`super::product_file`]).
     pub fn create(path: &Path, header: &[&str]) -> Result<Self, WriteError> {
         let failed = |source| WriteError {
             path: path.to_path_buf(),
             source,
         };
-        let file = std::fs::File::create(path).map_err(failed)?;
+        let file = super::product_file::create(path).map_err(failed)?;
         let mut stream = Self {
             path: path.to_path_buf(),
             file,

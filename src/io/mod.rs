@@ -3,6 +3,7 @@
 pub mod csv_table;
 pub mod output_folder;
 pub mod plot;
+pub mod product_file;
 pub mod sheet_frame;
 pub mod vtk;
 pub mod xy_curve;

@@ -3,8 +3,12 @@
 //! with the first one's; the lock is the operating system's, released when the process ends,
 //! however it ends (even killed), so a lock file left by a dead run is simply taken over. Once
 //! the lock is taken, the files an earlier run of the same kind left there are removed, and
-//! nothing else.
+//! nothing else. A symbolic link under one of those names is the user's (it points at their
+//! own file), and is never written through nor removed: the run is refused, naming it. A lock
+//! may also be shared, by processes that each write their own part of the folder (the cases
+//! of a study run one per process): they exclude a run that takes the folder whole.
 
+use super::product_file::{self, LinkInTheWay};
 use std::fs::{File, OpenOptions, TryLockError};
 use std::io::{Read, Seek, Write};
 use std::path::{Path, PathBuf};
@@ -47,14 +51,50 @@ fn is_series_file(name: &str, series: &str) -> bool {
         .is_some_and(|digits| !digits.is_empty() && digits.bytes().all(|b| b.is_ascii_digit()))
 }
 
+/// Who holds a folder that could not be taken.
+#[derive(Debug)]
+pub enum Holder {
+    /// A run that holds it whole: its lock file's line (pid, command line, start time).
+    Run(String),
+    /// Processes that share it.
+    Sharing,
+}
+
+impl std::fmt::Display for Holder {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Holder::Run(line) => write!(f, "another run ({line})"),
+            Holder::Sharing => write!(
+                f,
+                "processes that share it (the cases of a study run with `thermostamp sweep \
+                 --case`)"
+            ),
+        }
+    }
+}
+
 /// Why the folder could not be taken.
 #[derive(Debug, thiserror::Error)]
 pub enum FolderError {
     #[error(
-        "{} is being written by another run ({holder}); choose another --output or wait for it",
+        "{} is being written by {holder}; choose another --output or wait for it",
         folder.display()
     )]
-    Busy { folder: PathBuf, holder: String },
+    Busy { folder: PathBuf, holder: Holder },
+    #[error("{}: {link}", path.display())]
+    Link { path: PathBuf, link: LinkInTheWay },
+    #[error(
+        "the output folder {} is a symbolic link to {}, {problem}",
+        path.display(),
+        target.display()
+    )]
+    BrokenLink {
+        path: PathBuf,
+        target: PathBuf,
+        problem: &'static str,
+    },
+    #[error("the output folder {} is a loop of symbolic links", path.display())]
+    LinkLoop { path: PathBuf },
     #[error("{}: cannot {action}: {source}", path.display())]
     Io {
         path: PathBuf,
@@ -70,40 +110,60 @@ pub struct FolderLock {
     _file: File,
 }
 
+/// How a folder is held.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Hold {
+    /// By this process alone.
+    Whole,
+    /// Beside other processes sharing it, none holding it whole.
+    Shared,
+}
+
 /// Creates `folder` if missing, locks it for this run (`command` is the command line the lock
 /// file records, beside the process id and the start time), then removes the `products` an
-/// earlier run left there. Refused, naming the holder, while another run holds the folder.
+/// earlier run left there. Refused, naming the holder, while another run holds the folder;
+/// refused, naming it, where one of the `products` is a symbolic link.
 pub fn take_folder(
     folder: &Path,
     command: &str,
     products: &ProductFiles,
 ) -> Result<FolderLock, FolderError> {
-    let io = |path: &Path, action| {
-        let path = path.to_path_buf();
-        move |source| FolderError::Io {
-            path,
-            action,
-            source,
-        }
-    };
-    std::fs::create_dir_all(folder).map_err(io(folder, "create the output folder"))?;
-    let lock_path = folder.join(LOCK_FILE);
+    let lock = lock_folder(folder, LOCK_FILE, Hold::Whole, command)?;
+    clear_products(folder, products)?;
+    Ok(lock)
+}
+
+/// Creates `folder` if missing and locks it through its lock file `lock_name`, whole or
+/// shared. A process holding it whole records its line (pid, `command`, start time) in the
+/// lock file, by which a refused one names it.
+pub fn lock_folder(
+    folder: &Path,
+    lock_name: &str,
+    hold: Hold,
+    command: &str,
+) -> Result<FolderLock, FolderError> {
+    create_folder(folder)?;
+    let lock_path = folder.join(lock_name);
     // no truncation before the lock is ours: the holder's line names it to a refused run
-    let mut file = OpenOptions::new()
-        .read(true)
-        .write(true)
-        .create(true)
-        .truncate(false)
-        .open(&lock_path)
-        .map_err(io(&lock_path, "create the lock file"))?;
-    match file.try_lock() {
+    let mut file = product_file::open(
+        &lock_path,
+        OpenOptions::new()
+            .read(true)
+            .write(true)
+            .create(true)
+            .truncate(false),
+    )
+    .map_err(|source| link_or_io(&lock_path, "create the lock file", source))?;
+    let locked = match hold {
+        Hold::Whole => file.try_lock(),
+        Hold::Shared => file.try_lock_shared(),
+    };
+    match locked {
         Ok(()) => {}
         Err(TryLockError::WouldBlock) => {
-            let mut holder = String::new();
-            let _ = file.read_to_string(&mut holder);
             return Err(FolderError::Busy {
                 folder: folder.to_path_buf(),
-                holder: describe_holder(&holder),
+                holder: holder(&mut file),
             });
         }
         Err(TryLockError::Error(source)) => {
@@ -114,18 +174,35 @@ pub fn take_folder(
             })
         }
     }
-    let line = format!(
-        "pid {}, `{}`, started at {}\n",
-        std::process::id(),
-        command,
-        utc_now()
-    );
-    file.set_len(0)
-        .and_then(|()| file.rewind())
-        .and_then(|()| file.write_all(line.as_bytes()))
-        .map_err(io(&lock_path, "write the lock file"))?;
-    clear_products(folder, products)?;
+    if hold == Hold::Whole {
+        let line = format!(
+            "pid {}, `{}`, started at {}\n",
+            std::process::id(),
+            command,
+            utc_now()
+        );
+        file.set_len(0)
+            .and_then(|()| file.rewind())
+            .and_then(|()| file.write_all(line.as_bytes()))
+            .map_err(|source| FolderError::Io {
+                path: lock_path,
+                action: "write the lock file",
+                source,
+            })?;
+    }
     Ok(FolderLock { _file: file })
+}
+
+/// Who holds the lock that `file` could not take: processes sharing it when a shared lock
+/// can be had beside them (they write no line), else the run whose line the file holds.
+fn holder(file: &mut File) -> Holder {
+    if file.try_lock_shared().is_ok() {
+        let _ = file.unlock();
+        return Holder::Sharing;
+    }
+    let mut text = String::new();
+    let _ = file.read_to_string(&mut text);
+    Holder::Run(describe_holder(&text))
 }
 
 /// The holder as its lock file names it; a holder that has not written its line yet is still
@@ -137,19 +214,91 @@ fn describe_holder(text: &str) -> String {
     }
 }
 
+/// Creates `folder` and its parents. A symbolic link on the way that leads nowhere (to
+/// nothing, to a file, or round in a loop) is named, since the operating system's own word
+/// for it ("File exists") says nothing of the link.
+pub fn create_folder(folder: &Path) -> Result<(), FolderError> {
+    std::fs::create_dir_all(folder).map_err(|source| {
+        broken_link(folder).unwrap_or(FolderError::Io {
+            path: folder.to_path_buf(),
+            action: "create the output folder",
+            source,
+        })
+    })
+}
+
+/// The first of `path`'s ancestors (itself included), from the root down, that is a symbolic
+/// link to no folder.
+fn broken_link(path: &Path) -> Option<FolderError> {
+    let mut ancestors: Vec<&Path> = path
+        .ancestors()
+        .filter(|p| !p.as_os_str().is_empty())
+        .collect();
+    ancestors.reverse();
+    ancestors.into_iter().find_map(|p| {
+        let target = std::fs::read_link(p).ok()?;
+        let broken = |problem| {
+            Some(FolderError::BrokenLink {
+                path: p.to_path_buf(),
+                target: target.clone(),
+                problem,
+            })
+        };
+        match std::fs::metadata(p) {
+            Ok(meta) if meta.is_dir() => None,
+            Ok(_) => broken("which is not a folder"),
+            Err(e) if e.raw_os_error() == Some(libc::ELOOP) => Some(FolderError::LinkLoop {
+                path: p.to_path_buf(),
+            }),
+            Err(_) => broken("which does not exist"),
+        }
+    })
+}
+
+/// [`FolderError::Link`] for a link in the way, else [`FolderError::Io`].
+fn link_or_io(path: &Path, action: &'static str, source: std::io::Error) -> FolderError {
+    match product_file::link_at(path) {
+        Some(link) => FolderError::Link {
+            path: path.to_path_buf(),
+            link,
+        },
+        None => FolderError::Io {
+            path: path.to_path_buf(),
+            action,
+            source,
+        },
+    }
+}
+
 /// Removes the regular files of `products` in `folder`. A symbolic link of such a name is
-/// the user's doing (it points where the results should go), so it stays.
-fn clear_products(folder: &Path, products: &ProductFiles) -> Result<(), FolderError> {
-    let entries = std::fs::read_dir(folder).map_err(|source| FolderError::Io {
-        path: folder.to_path_buf(),
-        action: "list the output folder",
-        source,
-    })?;
-    for entry in entries.flatten() {
-        let name = entry.file_name();
-        let Some(name) = name.to_str() else { continue };
-        let regular = entry.file_type().is_ok_and(|t| t.is_file());
-        if regular && products.matches(name) {
+/// the user's doing (it points at their own file), so nothing is removed and the run is
+/// refused, naming it: writing the results would write through it.
+pub fn clear_products(folder: &Path, products: &ProductFiles) -> Result<(), FolderError> {
+    let entries: Vec<std::fs::DirEntry> = std::fs::read_dir(folder)
+        .map_err(|source| FolderError::Io {
+            path: folder.to_path_buf(),
+            action: "list the output folder",
+            source,
+        })?
+        .flatten()
+        .filter(|entry| {
+            entry
+                .file_name()
+                .to_str()
+                .is_some_and(|n| products.matches(n))
+        })
+        .collect();
+    if let Some(link) = entries
+        .iter()
+        .find_map(|entry| product_file::link_at(&entry.path()).map(|link| (entry.path(), link)))
+    {
+        return Err(FolderError::Link {
+            path: link.0,
+            link: link.1,
+        });
+    }
+    for entry in entries {
+        if entry.file_type().is_ok_and(|t| t.is_file()) {
             let path = entry.path();
             std::fs::remove_file(&path).map_err(|source| FolderError::Io {
                 path,
@@ -256,6 +405,79 @@ mod tests {
         );
         drop(first);
         take_folder(&dir, "thermostamp run b.toml", &forming_products()).unwrap();
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// A link under a product's name (here the `.tmp` of a frame) refuses the folder, naming
+    /// the link and its target, and nothing is removed: neither the link nor an earlier run's
+    /// regular files.
+    #[test]
+    fn a_link_among_the_products_refuses_the_folder_and_removes_nothing() {
+        let dir = temp_folder("link");
+        std::fs::create_dir_all(&dir).unwrap();
+        let mine = dir.join("mine.vtu");
+        std::fs::write(&mine, "the user's").unwrap();
+        std::os::unix::fs::symlink(&mine, dir.join("forming_0002.vtu.tmp")).unwrap();
+        std::fs::write(dir.join("forming.csv"), "old").unwrap();
+        let e = take_folder(&dir, "run", &forming_products()).unwrap_err();
+        let text = e.to_string();
+        assert!(
+            text.contains("forming_0002.vtu.tmp") && text.contains(&mine.display().to_string()),
+            "{text}"
+        );
+        assert!(dir.join("forming.csv").exists());
+        assert!(dir.join("forming_0002.vtu.tmp").is_symlink());
+        assert_eq!(std::fs::read_to_string(&mine).unwrap(), "the user's");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// Shared holds coexist; a whole hold is refused beside them, naming them as sharers, and
+    /// a shared one beside a whole one names the run.
+    #[test]
+    fn shared_holds_coexist_and_exclude_a_whole_one() {
+        let dir = temp_folder("shared");
+        let a = lock_folder(&dir, LOCK_FILE, Hold::Shared, "case 1").unwrap();
+        let b = lock_folder(&dir, LOCK_FILE, Hold::Shared, "case 2").unwrap();
+        let e = lock_folder(&dir, LOCK_FILE, Hold::Whole, "sweep").unwrap_err();
+        assert!(
+            matches!(
+                e,
+                FolderError::Busy {
+                    holder: Holder::Sharing,
+                    ..
+                }
+            ),
+            "{e}"
+        );
+        drop((a, b));
+        let whole = lock_folder(&dir, LOCK_FILE, Hold::Whole, "sweep s.toml").unwrap();
+        let e = lock_folder(&dir, LOCK_FILE, Hold::Shared, "case 1").unwrap_err();
+        assert!(e.to_string().contains("`sweep s.toml`"), "{e}");
+        drop(whole);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// An output folder through a link to nothing, to a file, or round a loop is named as
+    /// such; through a link to a folder it is that folder.
+    #[test]
+    fn broken_links_to_the_folder_are_named() {
+        let dir = temp_folder("broken");
+        std::fs::create_dir_all(dir.join("real")).unwrap();
+        std::fs::write(dir.join("file"), "").unwrap();
+        let link = |name: &str, to: &str| {
+            std::os::unix::fs::symlink(dir.join(to), dir.join(name)).unwrap();
+            dir.join(name)
+        };
+        let expect = |folder: PathBuf, piece: &str| {
+            let e = create_folder(&folder).unwrap_err().to_string();
+            assert!(e.contains(piece), "{e}");
+        };
+        expect(link("dangling", "nowhere"), "which does not exist");
+        expect(link("to-file", "file").join("sub"), "which is not a folder");
+        link("loop-a", "loop-b");
+        expect(link("loop-b", "loop-a"), "a loop of symbolic links");
+        create_folder(&link("to-real", "real").join("sub")).unwrap();
+        assert!(dir.join("real/sub").is_dir());
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -764,7 +764,8 @@ fn downsample(fine: &[u8], fine_width: usize, factor: usize) -> Vec<u8> {
     rgb
 }
 
-/// Encodes in memory, then writes the file in one go, so that a failure is about the file.
+/// Encodes in memory, then writes the file in one go, so that a failure is about the file;
+/// never through a symbolic link ([`super::product_file`]).
 fn encode_png(path: &Path, rgb: &[u8], width: u32, height: u32) -> Result<(), PlotError> {
     let encode_error = |source| PlotError::Encode {
         path: path.to_path_buf(),
@@ -777,7 +778,7 @@ fn encode_png(path: &Path, rgb: &[u8], width: u32, height: u32) -> Result<(), Pl
     let mut writer = encoder.write_header().map_err(encode_error)?;
     writer.write_image_data(rgb).map_err(encode_error)?;
     writer.finish().map_err(encode_error)?;
-    std::fs::write(path, bytes).map_err(|source| PlotError::Io {
+    super::product_file::write(path, &bytes).map_err(|source| PlotError::Io {
         path: path.to_path_buf(),
         source,
     })

@@ -516,27 +516,13 @@ fn xml_escape(text: &str) -> String {
     out
 }
 
-/// Writes `text` to `path` through `path.tmp` and a rename.
+/// Writes `text` to `path` through `path.tmp` and a rename, never through a symbolic link
+/// ([`super::product_file::replace`]).
 fn write_atomically(path: &Path, text: &str) -> Result<(), VtkError> {
-    let mut tmp = path.as_os_str().to_owned();
-    tmp.push(".tmp");
-    let tmp = PathBuf::from(tmp);
-    std::fs::write(&tmp, text).map_err(|source| {
-        // a disk that filled up mid-write leaves a partial temporary file: not ours to leave
-        let _ = std::fs::remove_file(&tmp);
-        VtkError::Io {
-            path: path.to_path_buf(),
-            action: "write the file",
-            source,
-        }
-    })?;
-    std::fs::rename(&tmp, path).map_err(|source| {
-        let _ = std::fs::remove_file(&tmp);
-        VtkError::Io {
-            path: path.to_path_buf(),
-            action: "replace the file",
-            source,
-        }
+    super::product_file::replace(path, text.as_bytes()).map_err(|source| VtkError::Io {
+        path: path.to_path_buf(),
+        action: "write the file",
+        source,
     })
 }
 

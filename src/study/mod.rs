@@ -1,9 +1,11 @@
 //! Process studies (`thermostamp sweep`, docs/study.md): a base forming scenario run over the
 //! full factorial of parameter values, each case in its own folder, resumable, and summarised
-//! in one table and charts.
+//! in one table and charts; one study per folder, recorded there.
 
 pub mod file;
+pub mod folder;
+pub mod identity;
 pub mod run;
 pub mod summary;
 
-pub use file::{Case, Parameter, Study, StudyError};
+pub use file::{Case, Parameter, Study, StudyError, Values};

@@ -3,10 +3,14 @@
 //! it ends, the case's outcome is written to `case-result.toml` in one step (written aside,
 //! then renamed): a folder with that file is a finished case and is not run again; a folder
 //! without it (a sweep killed part-way) is cleared and its case run again from the start.
+//! While a case runs, its process holds the case's lock, so that the same case is never run
+//! by two processes at once (a batch scheduler that starts a job twice).
 
 use super::file::{Case, Study};
+use crate::io::output_folder::{lock_folder, FolderError, Hold, LOCK_FILE};
+use crate::io::product_file;
 use serde::{Deserialize, Serialize};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Stdio};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
@@ -18,6 +22,9 @@ pub const CASE_RESULT: &str = "case-result.toml";
 pub const CASE_SCENARIO: &str = "scenario.toml";
 /// Standard output and error of the case's run.
 pub const CASE_LOG: &str = "run.log";
+/// The lock a case's process holds while the case runs (the run inside it holds the folder's
+/// own [`LOCK_FILE`]).
+pub const CASE_LOCK: &str = ".thermostamp-case.lock";
 
 /// How a finished case ended.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -43,16 +50,27 @@ pub fn finished(folder: &Path) -> Option<CaseResult> {
 }
 
 /// Runs `case` from the start in its folder with `exe run` (the thermostamp executable) on
-/// `threads` threads, and records how it ended. Errors: the folder or its files cannot be
-/// written, the executable cannot be started.
-pub fn run_case(study: &Study, case: &Case, exe: &Path) -> anyhow::Result<CaseResult> {
-    let folder = study.case_folder(case);
-    if folder.exists() {
-        std::fs::remove_dir_all(&folder)
-            .map_err(|e| anyhow::anyhow!("cannot clear {}: {e}", folder.display()))?;
+/// the study's threads per case, and records how it ended; `command` is the command line the
+/// case's lock records. Errors: the case is being run by another process, its folder is a
+/// symbolic link or cannot be written, the executable cannot be started.
+pub fn run_case(
+    study: &Study,
+    case: &Case,
+    exe: &Path,
+    command: &str,
+) -> anyhow::Result<CaseResult> {
+    let folder = study.case_folder(case.number);
+    if let Some(link) = product_file::link_at(&folder) {
+        anyhow::bail!("{}: {link}", folder.display());
     }
-    std::fs::create_dir_all(&folder)
-        .map_err(|e| anyhow::anyhow!("cannot create {}: {e}", folder.display()))?;
+    let _lock = lock_folder(&folder, CASE_LOCK, Hold::Whole, command).map_err(|e| match e {
+        FolderError::Busy { folder, holder } => anyhow::anyhow!(
+            "{} is being written by {holder}: the case is already running; wait for it to end",
+            folder.display()
+        ),
+        other => other.into(),
+    })?;
+    clear_case_folder(&folder)?;
     let scenario = folder.join(CASE_SCENARIO);
     let text = crate::forming::Scenario::standalone_text(&study.base, &study.overrides(case))?;
     let header = format!(
@@ -63,7 +81,8 @@ pub fn run_case(study: &Study, case: &Case, exe: &Path) -> anyhow::Result<CaseRe
         study.base.display()
     );
     write(&scenario, &format!("{header}{text}"))?;
-    let log = std::fs::File::create(folder.join(CASE_LOG))?;
+    let log_path = folder.join(CASE_LOG);
+    let log = product_file::create(&log_path).map_err(|e| cannot_write(&log_path, e))?;
     let start = Instant::now();
     let output = Command::new(exe)
         .arg("run")
@@ -77,10 +96,9 @@ pub fn run_case(study: &Study, case: &Case, exe: &Path) -> anyhow::Result<CaseRe
         .output()
         .map_err(|e| anyhow::anyhow!("cannot start {}: {e}", exe.display()))?;
     let stderr = String::from_utf8_lossy(&output.stderr);
-    std::fs::OpenOptions::new()
-        .append(true)
-        .open(folder.join(CASE_LOG))
-        .and_then(|mut f| std::io::Write::write_all(&mut f, stderr.as_bytes()))?;
+    product_file::append(&log_path)
+        .and_then(|mut f| std::io::Write::write_all(&mut f, stderr.as_bytes()))
+        .map_err(|e| cannot_write(&log_path, e))?;
     let result = CaseResult {
         status: if output.status.success() {
             "done".into()
@@ -94,10 +112,38 @@ pub fn run_case(study: &Study, case: &Case, exe: &Path) -> anyhow::Result<CaseRe
         },
         wall_seconds: start.elapsed().as_secs_f64(),
     };
-    let aside = folder.join(format!("{CASE_RESULT}.part"));
-    write(&aside, &toml::to_string(&result)?)?;
-    std::fs::rename(&aside, folder.join(CASE_RESULT))?;
+    let path = folder.join(CASE_RESULT);
+    product_file::replace(&path, toml::to_string(&result)?.as_bytes())
+        .map_err(|e| cannot_write(&path, e))?;
     Ok(result)
+}
+
+/// Removes what an earlier, unfinished try of the case left in its folder (the folder is the
+/// case's own), all but the locks: the case's, held by this process, and the run's, which a
+/// run still writing there (left over from a killed sweep) holds and so refuses the new one.
+fn clear_case_folder(folder: &Path) -> anyhow::Result<()> {
+    let entries = std::fs::read_dir(folder)
+        .map_err(|e| anyhow::anyhow!("cannot list {}: {e}", folder.display()))?;
+    for entry in entries.flatten() {
+        if [CASE_LOCK, LOCK_FILE]
+            .map(std::ffi::OsStr::new)
+            .contains(&entry.file_name().as_os_str())
+        {
+            continue;
+        }
+        let path = entry.path();
+        let removed = if entry.file_type().is_ok_and(|t| t.is_dir()) {
+            std::fs::remove_dir_all(&path)
+        } else {
+            std::fs::remove_file(&path)
+        };
+        removed.map_err(|e| anyhow::anyhow!("cannot clear {}: {e}", path.display()))?;
+    }
+    Ok(())
+}
+
+fn cannot_write(path: &Path, e: std::io::Error) -> anyhow::Error {
+    anyhow::anyhow!("cannot write {}: {e}", path.display())
 }
 
 /// The last line of a failed run's standard error that says what went wrong (a warning or the
@@ -116,7 +162,7 @@ fn failure_reason(stderr: &str, code: Option<i32>) -> String {
 }
 
 fn write(path: &Path, text: &str) -> anyhow::Result<()> {
-    std::fs::write(path, text).map_err(|e| anyhow::anyhow!("cannot write {}: {e}", path.display()))
+    product_file::write(path, text.as_bytes()).map_err(|e| cannot_write(path, e))
 }
 
 /// One finished case, as the sweep reports it.
@@ -130,14 +176,15 @@ pub struct Finished<'a> {
     pub elapsed: f64,
 }
 
-/// Runs `cases` on `jobs` cases at a time, calling `report` as each one finishes (in the order
-/// they finish). A case that cannot even be started is an error that ends the sweep after the
-/// running cases.
+/// Runs the cases numbered `numbers` on `jobs` cases at a time, calling `report` as each one
+/// finishes (in the order they finish); `command` is the command line their locks record. A
+/// case that cannot even be started is an error that ends the sweep after the running cases.
 pub fn run_cases(
     study: &Study,
-    cases: &[&Case],
+    numbers: &[usize],
     jobs: usize,
     exe: &Path,
+    command: &str,
     report: &(dyn Fn(Finished) + Sync),
 ) -> anyhow::Result<Vec<(usize, CaseResult)>> {
     /// The cases finished so far, and the first case that could not be run.
@@ -153,27 +200,30 @@ pub fn run_cases(
     let lock = || progress.lock().unwrap_or_else(|e| e.into_inner());
     let start = Instant::now();
     std::thread::scope(|scope| {
-        for _ in 0..jobs.clamp(1, cases.len().max(1)) {
+        for _ in 0..jobs.clamp(1, numbers.len().max(1)) {
             scope.spawn(|| {
-                while let Some(case) = cases.get(next.fetch_add(1, Ordering::SeqCst)) {
+                while let Some(&number) = numbers.get(next.fetch_add(1, Ordering::SeqCst)) {
                     if lock().error.is_some() {
                         break;
                     }
-                    let outcome = run_case(study, case, exe);
+                    let Some(case) = study.case(number) else {
+                        continue;
+                    };
+                    let outcome = run_case(study, &case, exe, command);
                     let mut p = lock();
                     match outcome {
                         Ok(result) => {
-                            p.done.push((case.number, result.clone()));
+                            p.done.push((number, result.clone()));
                             report(Finished {
-                                case,
+                                case: &case,
                                 result,
                                 count: p.done.len(),
-                                of: cases.len(),
+                                of: numbers.len(),
                                 elapsed: start.elapsed().as_secs_f64(),
                             });
                         }
                         Err(e) => {
-                            p.error.get_or_insert(format!("case {}: {e}", case.number));
+                            p.error.get_or_insert(format!("case {number}: {e:#}"));
                         }
                     }
                 }
@@ -186,17 +236,4 @@ pub fn run_cases(
     }
     done.sort_by_key(|(n, _)| *n);
     Ok(done)
-}
-
-/// Every case of `study` with its folder and, for a finished case, its result.
-pub fn finished_cases(study: &Study) -> Vec<(Case, PathBuf, Option<CaseResult>)> {
-    study
-        .cases()
-        .into_iter()
-        .map(|case| {
-            let folder = study.case_folder(&case);
-            let result = finished(&folder);
-            (case, folder, result)
-        })
-        .collect()
 }

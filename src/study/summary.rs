@@ -4,8 +4,9 @@
 //! alone, so that a sweep spread over several processes or machines has one summary.
 
 use super::file::{Case, Study};
-use super::run::{finished_cases, CaseResult};
+use super::run::{finished, CaseResult};
 use crate::forming::run::{RESULT_COLUMNS, RESULT_CSV};
+use crate::io::output_folder::ProductFiles;
 use crate::io::plot::{write_map_png, write_png, LinePlot, LineStyle, MapPlot, Series};
 use std::path::{Path, PathBuf};
 
@@ -16,6 +17,23 @@ pub const MEASURES: &[&str] = match RESULT_COLUMNS.split_first() {
     None => &RESULT_COLUMNS,
 };
 pub const SUMMARY_CSV: &str = "summary.csv";
+/// The charts: `study-<name>.png`.
+const CHARTS: [&str; 2] = ["waviness", "max-shear"];
+
+/// The files the summary writes into the study's folder, by which a later summary finds and
+/// replaces them.
+pub fn products() -> ProductFiles {
+    ProductFiles {
+        names: std::iter::once(SUMMARY_CSV.to_string())
+            .chain(CHARTS.map(chart_name))
+            .collect(),
+        series: None,
+    }
+}
+
+fn chart_name(name: &str) -> String {
+    format!("study-{name}.png")
+}
 
 /// One case in the summary.
 #[derive(Clone, Debug, PartialEq)]
@@ -38,9 +56,13 @@ impl Row {
 
 /// The summary's rows, read from the case folders.
 pub fn rows(study: &Study) -> Vec<Row> {
-    finished_cases(study)
-        .into_iter()
-        .map(|(case, folder, result)| row(case, &folder, result))
+    study
+        .cases()
+        .map(|case| {
+            let folder = study.case_folder(case.number);
+            let result = finished(&folder);
+            row(case, &folder, result)
+        })
         .collect()
 }
 
@@ -104,7 +126,6 @@ fn field(text: &str) -> String {
 
 /// Writes `summary.csv` and the charts into the study's folder; returns the files written.
 pub fn write_summary(study: &Study, rows: &[Row]) -> anyhow::Result<Vec<PathBuf>> {
-    std::fs::create_dir_all(&study.folder)?;
     let mut header: Vec<String> = vec!["case".into()];
     header.extend(study.parameters.iter().map(|p| p.key.clone()));
     header.extend(["status".into(), "reason".into(), "wrinkled".into()]);
@@ -127,7 +148,7 @@ pub fn write_summary(study: &Study, rows: &[Row]) -> anyhow::Result<Vec<PathBuf>
         text.push_str(&(fields.join(",") + "\n"));
     }
     let csv = study.folder.join(SUMMARY_CSV);
-    std::fs::write(&csv, text)
+    crate::io::product_file::write(&csv, text.as_bytes())
         .map_err(|e| anyhow::anyhow!("cannot write {}: {e}", csv.display()))?;
     let mut files = vec![csv];
     files.extend(write_charts(study, rows)?);
@@ -150,21 +171,16 @@ fn write_charts(study: &Study, rows: &[Row]) -> anyhow::Result<Vec<PathBuf>> {
         study
             .parameters
             .get(i)
-            .is_some_and(|p| p.values.iter().all(|v| number(v).is_some()))
+            .is_some_and(|p| p.values.iter().all(|v| number(&v).is_some()))
     };
     let charts = [
         (
             "waviness",
             "flange waviness (mm)",
             Some(study.wrinkle_threshold),
-            "waviness",
+            CHARTS[0],
         ),
-        (
-            "max_shear_deg",
-            "largest shear angle (°)",
-            None,
-            "max-shear",
-        ),
+        ("max_shear_deg", "largest shear angle (°)", None, CHARTS[1]),
     ];
     let mut files = Vec::new();
     // cases whose parameters beyond the first two are at their first values
@@ -174,11 +190,11 @@ fn write_charts(study: &Study, rows: &[Row]) -> anyhow::Result<Vec<PathBuf>> {
             .iter()
             .zip(&study.parameters)
             .skip(2)
-            .all(|(v, p)| *v == p.values[0])
+            .all(|(v, p)| Some(v) == p.values.get(0).as_ref())
     };
     let shown: Vec<&Row> = rows.iter().filter(first_of_rest).collect();
     for (measure, label, flag, name) in charts {
-        let path = study.folder.join(format!("study-{name}.png"));
+        let path = study.folder.join(chart_name(name));
         let _ = std::fs::remove_file(&path);
         if !shown
             .iter()
@@ -186,7 +202,7 @@ fn write_charts(study: &Study, rows: &[Row]) -> anyhow::Result<Vec<PathBuf>> {
         {
             continue;
         }
-        if numeric(0) && numeric(1) && study.parameters[1].values.len() > 1 {
+        if numeric(0) && numeric(1) && study.parameters[1].values.count() > 1 {
             write_map_png(
                 &path,
                 &heat_map(study, &shown, measure, label, flag),
@@ -224,7 +240,7 @@ fn heat_map(
         let mut v: Vec<f64> = study.parameters[i]
             .values
             .iter()
-            .filter_map(number)
+            .filter_map(|v| number(&v))
             .collect();
         v.sort_by(f64::total_cmp);
         v
@@ -247,7 +263,12 @@ fn heat_map(
         values.push(value);
         outlined.push(flag.is_some_and(|f| value > f));
     }
-    let rest = if study.parameters.iter().skip(2).any(|p| p.values.len() > 1) {
+    let rest = if study
+        .parameters
+        .iter()
+        .skip(2)
+        .any(|p| p.values.count() > 1)
+    {
         " (other parameters at their first values)"
     } else {
         ""

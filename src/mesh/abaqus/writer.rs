@@ -82,7 +82,8 @@ fn numbers(values: &[f64]) -> String {
 }
 
 /// Writes `mesh` to `path` as an Abaqus input file (see [`write_inp_to`]). Nothing is written
-/// when the mesh or `elements` is not valid.
+/// when the mesh or `elements` is not valid, nor through a symbolic link at `path`
+/// ([`crate::io::product_file`]).
 pub fn write_inp(
     path: &Path,
     mesh: &Mesh,
@@ -91,7 +92,7 @@ pub fn write_inp(
     let file = path.display().to_string();
     let mut bytes = Vec::new();
     write_inp_to(&mut bytes, &file, mesh, elements)?;
-    std::fs::write(path, bytes)
+    crate::io::product_file::write(path, &bytes)
         .map_err(|e| MeshFileError::in_file(&file, format!("cannot write: {e}")))
 }
 
