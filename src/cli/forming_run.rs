@@ -2,7 +2,7 @@
 //! punch-force plot, a progress bar and a summary table.
 
 use super::shared::{
-    interrupt_flag, print_checked_table, status_row, take_output_folder, with_threads, Bar,
+    print_checked_table, status_row, take_output_folder, with_threads, Bar, Interrupt,
     ScenarioArgs, Watch,
 };
 use crate::experiment::sheet_test::{FrameOutput, HistorySink, LiveOutput};
@@ -13,7 +13,7 @@ use crate::io::output_folder::ProductFiles;
 use crate::io::plot::{write_map_png, write_png, LinePlot, LineStyle, MapPlot, Series};
 use crate::io::vtk::PvdSeries;
 use crate::io::CsvStream;
-use crate::solver::estimate::format_bytes;
+use crate::solver::estimate::RunEstimate;
 use crate::solver::SolverKind;
 use anyhow::Context;
 use std::path::{Path, PathBuf};
@@ -28,13 +28,29 @@ pub struct Args {
     threads: Option<usize>,
 }
 
+/// The estimate's line: the explicit solver's steps, or the implicit solver's increments.
+fn describe(estimate: &RunEstimate, solver: SolverKind) -> String {
+    match solver {
+        SolverKind::Explicit => estimate.describe(),
+        SolverKind::Implicit => estimate.describe_increments(),
+    }
+}
+
 pub fn run(args: &Args) -> anyhow::Result<()> {
     with_threads(args.threads, || forming(args))
 }
 
 fn forming(args: &Args) -> anyhow::Result<()> {
+    let interrupt = Interrupt::install()?;
     let (scenario, dir) = args.scenario.load()?;
-    let forming = FormingModel::new(&scenario).map_err(|e| anyhow::anyhow!(e))?;
+    let forming = FormingModel::reporting(&scenario, &mut |estimate| {
+        eprintln!(
+            "{} (from the scenario, before set-up)",
+            describe(estimate, scenario.process.solver)
+        );
+    })
+    .map_err(|e| anyhow::anyhow!(e))?;
+    let stop = interrupt.running();
     for note in &forming.notes {
         eprintln!("note: {note}");
     }
@@ -51,19 +67,11 @@ fn forming(args: &Args) -> anyhow::Result<()> {
             )),
         },
     };
-    match forming.solver {
-        SolverKind::Explicit => eprintln!("{}", forming.estimate.describe()),
-        SolverKind::Implicit => eprintln!(
-            "implicit quasi-static run of {} elements at the physical punch speed, {} of memory",
-            forming.model.elements.len(),
-            format_bytes(forming.estimate.memory)
-        ),
-    }
-    let stop = interrupt_flag()?;
+    eprintln!("{}", describe(&forming.estimate, forming.solver));
     let mut bar = Bar::new(forming.settings.end_time);
     let mut watch = Watch {
         bar: &mut bar,
-        stop: &stop,
+        stop,
     };
     let result = crate::forming::run::run(&forming, Some(output), Some(&mut watch));
     bar.finish();

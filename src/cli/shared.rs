@@ -86,19 +86,40 @@ impl Progress for Bar {
     }
 }
 
-/// A flag that Ctrl-C (SIGINT) and SIGTERM raise: the run then finishes its step, records it
-/// and stops. A second signal, while the first is being honoured, ends the process at once
-/// with the interrupted exit code (130).
-pub fn interrupt_flag() -> anyhow::Result<Arc<AtomicBool>> {
-    let flag = Arc::new(AtomicBool::new(false));
-    let raised = Arc::clone(&flag);
-    ctrlc::set_handler(move || {
-        if raised.swap(true, Ordering::SeqCst) {
-            std::process::exit(super::EXIT_INTERRUPTED);
-        }
-    })
-    .context("cannot install the Ctrl-C handler")?;
-    Ok(flag)
+/// What Ctrl-C (SIGINT) and SIGTERM do, installed before a command's set-up. During the set-up
+/// (reading, meshing, building the model, before anything is written) a signal ends the process
+/// at once with the interrupted exit code (130), saying so: there is nothing to keep. Once the
+/// run has started ([`Interrupt::running`]) a signal raises the flag instead: the run finishes
+/// its step, records it and stops; a second signal, while the first is being honoured, ends
+/// the process at once (130).
+pub struct Interrupt {
+    raised: Arc<AtomicBool>,
+    running: Arc<AtomicBool>,
+}
+
+impl Interrupt {
+    pub fn install() -> anyhow::Result<Self> {
+        let raised = Arc::new(AtomicBool::new(false));
+        let running = Arc::new(AtomicBool::new(false));
+        let (flag, started) = (Arc::clone(&raised), Arc::clone(&running));
+        ctrlc::set_handler(move || {
+            if !started.load(Ordering::SeqCst) {
+                eprintln!("\ninterrupted during the set-up: nothing was run or written");
+                std::process::exit(super::EXIT_INTERRUPTED);
+            }
+            if flag.swap(true, Ordering::SeqCst) {
+                std::process::exit(super::EXIT_INTERRUPTED);
+            }
+        })
+        .context("cannot install the Ctrl-C handler")?;
+        Ok(Self { raised, running })
+    }
+
+    /// From now on a signal asks the run to stop after its step: returns the flag it raises.
+    pub fn running(&self) -> &AtomicBool {
+        self.running.store(true, Ordering::SeqCst);
+        &self.raised
+    }
 }
 
 /// The progress bar of a run and the flag that stops it.

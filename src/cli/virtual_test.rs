@@ -2,8 +2,8 @@
 //! progress bar and a summary table.
 
 use super::shared::{
-    implicit_summary, interrupt_flag, print_checked_table, status_row, take_output_folder,
-    with_threads, Bar, Watch,
+    implicit_summary, print_checked_table, status_row, take_output_folder, with_threads, Bar,
+    Interrupt, Watch,
 };
 use crate::experiment::bias_extension::{BiasExtension, BiasRow};
 use crate::experiment::picture_frame::{PictureFrame, PictureFrameRow};
@@ -192,13 +192,15 @@ pub struct PictureFrameArgs {
 }
 
 pub fn run(command: &TestCommand) -> anyhow::Result<()> {
+    let interrupt = Interrupt::install()?;
+    let i = &interrupt;
     match command {
         TestCommand::BiasExtension(args) => {
-            with_threads(args.common.threads, || bias_extension(args))
+            with_threads(args.common.threads, || bias_extension(args, i))
         }
-        TestCommand::Uniaxial(args) => with_threads(args.common.threads, || uniaxial(args)),
+        TestCommand::Uniaxial(args) => with_threads(args.common.threads, || uniaxial(args, i)),
         TestCommand::PictureFrame(args) => {
-            with_threads(args.common.threads, || picture_frame(args))
+            with_threads(args.common.threads, || picture_frame(args, i))
         }
     }
 }
@@ -266,7 +268,7 @@ fn dimension(option: &str, value: f64) -> anyhow::Result<f64> {
     Ok(value)
 }
 
-fn bias_extension(args: &BiasArgs) -> anyhow::Result<()> {
+fn bias_extension(args: &BiasArgs, interrupt: &Interrupt) -> anyhow::Result<()> {
     let c = &args.common;
     let (card, temperature) = card_and_temperature(c)?;
     let mut test = BiasExtension::benchmark(temperature);
@@ -276,10 +278,17 @@ fn bias_extension(args: &BiasArgs) -> anyhow::Result<()> {
     c.apply(&mut test.process);
     let names = ("bias extension", "bias-extension");
     let specimen = (test.width, test.length);
-    sheet_test(c, &card, (names, specimen), &mut test, bias_report)
+    sheet_test(
+        c,
+        &card,
+        (names, specimen),
+        &mut test,
+        bias_report,
+        interrupt,
+    )
 }
 
-fn uniaxial(args: &UniaxialArgs) -> anyhow::Result<()> {
+fn uniaxial(args: &UniaxialArgs, interrupt: &Interrupt) -> anyhow::Result<()> {
     let c = &args.common;
     let (card, temperature) = card_and_temperature(c)?;
     let mut test = UniaxialTension::standard(temperature);
@@ -293,10 +302,17 @@ fn uniaxial(args: &UniaxialArgs) -> anyhow::Result<()> {
     c.apply(&mut test.process);
     let names = ("uniaxial test", "uniaxial");
     let specimen = (test.width, test.length);
-    sheet_test(c, &card, (names, specimen), &mut test, uniaxial_report)
+    sheet_test(
+        c,
+        &card,
+        (names, specimen),
+        &mut test,
+        uniaxial_report,
+        interrupt,
+    )
 }
 
-fn picture_frame(args: &PictureFrameArgs) -> anyhow::Result<()> {
+fn picture_frame(args: &PictureFrameArgs, interrupt: &Interrupt) -> anyhow::Result<()> {
     let c = &args.common;
     let (card, temperature) = card_and_temperature(c)?;
     let mut test = PictureFrame::standard(temperature);
@@ -305,7 +321,14 @@ fn picture_frame(args: &PictureFrameArgs) -> anyhow::Result<()> {
     c.apply(&mut test.process);
     let names = ("picture frame", "picture-frame");
     let specimen = (test.side, test.side);
-    sheet_test(c, &card, (names, specimen), &mut test, picture_frame_report)
+    sheet_test(
+        c,
+        &card,
+        (names, specimen),
+        &mut test,
+        picture_frame_report,
+        interrupt,
+    )
 }
 
 /// Validates and runs a [`SheetTest`] with the shared outputs; `names` as for
@@ -317,6 +340,7 @@ fn sheet_test<T: SheetTest>(
     (names, specimen): ((&str, &str), (f64, f64)),
     test: &mut T,
     report: fn(&[T::Row]) -> TestReport,
+    interrupt: &Interrupt,
 ) -> anyhow::Result<()> {
     let refuse = |e: String| anyhow::anyhow!("{}: {e}", names.0);
     test.validate().map_err(refuse)?;
@@ -372,6 +396,7 @@ fn sheet_test<T: SheetTest>(
             let result = test.run(&card.laminate, card.density, Some(output), Some(bar))?;
             Ok((result.run, report(&result.rows)))
         },
+        interrupt,
     )
 }
 
@@ -471,6 +496,7 @@ fn run_and_report(
     (end_time, time_scaling): (f64, f64),
     columns: [&str; 3],
     run: impl FnOnce(OpenOutput, &mut dyn Progress) -> Result<(TestRun, TestReport), String>,
+    interrupt: &Interrupt,
 ) -> anyhow::Result<()> {
     let _lock = take_output_folder(&c.output, &products(name))?;
     let csv = c.output.join(format!("{name}.csv"));
@@ -484,11 +510,11 @@ fn run_and_report(
         frames: frame_output(&c.output, name, (c.frames, end_time), time_scaling)?,
     };
     let wrote_frames = output.frames.is_some();
-    let stop = interrupt_flag()?;
+    let stop = interrupt.running();
     let mut bar = Bar::new(end_time);
     let mut watch = Watch {
         bar: &mut bar,
-        stop: &stop,
+        stop,
     };
     let (run, report) = run(output, &mut watch).map_err(|e| anyhow::anyhow!("{label}: {e}"))?;
     bar.finish();

@@ -5,10 +5,14 @@
 //! pressing the blank harder than any composite is formed.
 
 use super::scenario::{BlankShape, Scenario, ToolSet};
+use super::setup::DEFAULT_INCREMENTS;
+use crate::experiment::sheet_test::Crosshead;
 use crate::limits::{shown, HOLDER_PRESSURE};
-use crate::material::MaterialCard;
-use crate::solver::estimate::{self, item_bytes, RunEstimate};
-use crate::solver::{implicit, Model, SolverSettings};
+use crate::material::{MaterialCard, MembraneKinematics};
+use crate::mesh::{DiagonalPattern, Mesh};
+use crate::solver::estimate::{self, item_bytes, RunEstimate, RunSize};
+use crate::solver::{implicit, Model, SolverKind, SolverSettings};
+use nalgebra::{Matrix2, Vector3};
 
 /// What sets the size of a built-in rectangle, of a file blank, of built-in tools.
 const RECTANGLE_KEYS: &str = "blank.element_size (or shrink blank.width, blank.length)";
@@ -16,43 +20,191 @@ const FILE_KEYS: &str = "the blank's mesh (blank.mesh)";
 /// The built-in tools are meshed over the blank's reach, so a huge blank makes huge tools too.
 const TOOL_KEYS: &str = "tools.resolution (or shrink blank.width, blank.length)";
 
-/// Refuses a built-in rectangle (and built-in tool set) that would not fit the memory the
-/// machine has free, from the scenario's numbers alone: called before the mesh is made, so
-/// that a hundredth-of-a-millimetre element size is refused at once instead of failing an
-/// allocation.
-pub fn check_before_mesh(s: &Scenario, card: &MaterialCard) -> Result<(), String> {
-    let BlankShape::Rectangle {
-        width,
-        length,
-        element_size,
-        pattern,
-    } = &s.blank.shape
-    else {
-        return Ok(());
-    };
-    let cells = |side: f64| (side / element_size).round().max(1.0);
-    let (nx, ny) = (cells(*width), cells(*length));
-    let (elements, nodes) = pattern.counts(nx, ny);
+/// What the blank will be, as far as the run's cost goes: its cell and node counts, the
+/// smallest altitude of its cells (mm), which sets the explicit solver's step, and half the
+/// diagonal of its bounding box (mm), which sets the built-in tools' size.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BlankSize {
+    pub elements: f64,
+    pub quads: f64,
+    pub nodes: f64,
+    pub altitude: f64,
+    pub reach: f64,
+}
+
+impl BlankSize {
+    /// The built-in rectangle's, from the scenario's keys alone; `None` for a mesh file.
+    pub fn of_rectangle(s: &Scenario) -> Option<Self> {
+        let BlankShape::Rectangle {
+            width,
+            length,
+            element_size,
+            pattern,
+        } = &s.blank.shape
+        else {
+            return None;
+        };
+        let cells = |side: f64| (side / element_size).round().max(1.0);
+        let (nx, ny) = (cells(*width), cells(*length));
+        let (elements, nodes) = pattern.counts(nx, ny);
+        let (quads, altitude) = match pattern {
+            DiagonalPattern::Quad => (elements, *element_size),
+            DiagonalPattern::Crossed => (0.0, 0.5 * element_size),
+            _ => (0.0, element_size * std::f64::consts::FRAC_1_SQRT_2),
+        };
+        Some(Self {
+            elements,
+            quads,
+            nodes,
+            altitude,
+            reach: 0.5 * width.hypot(*length),
+        })
+    }
+
+    /// A mesh's, once read from its file.
+    pub fn of_mesh(mesh: &Mesh) -> Self {
+        let quads = mesh.cells.iter().filter(|c| c.is_quad()).count();
+        // no cell of area A has a smallest altitude above sqrt(sqrt(3) A) (the equilateral
+        // triangle's): an upper bound, so that the steps are not overestimated
+        let smallest_side = (0..mesh.cells.len())
+            .map(|t| (3f64.sqrt() * mesh.area(t)).sqrt())
+            .fold(f64::INFINITY, f64::min);
+        let (low, high) = mesh.nodes.iter().fold(
+            (
+                Vector3::repeat(f64::INFINITY),
+                Vector3::repeat(f64::NEG_INFINITY),
+            ),
+            |(low, high), x| (low.inf(x), high.sup(x)),
+        );
+        Self {
+            elements: mesh.cells.len() as f64,
+            quads: quads as f64,
+            nodes: mesh.nodes.len() as f64,
+            altitude: smallest_side,
+            reach: 0.5 * (high - low).norm(),
+        }
+    }
+}
+
+/// The run's steps (or increments), memory and wall time from the scenario's keys and the
+/// blank's size, before the model is built (a rectangle is not meshed yet): printed first, so
+/// that a run of millions of cells answers at once. Refused when it cannot fit the memory the
+/// machine has free, or (explicit) when even the membrane's step at rest, an upper bound of the
+/// step the run will take, gives more than [`estimate::MAX_STEPS`] steps. The estimate of the
+/// built model follows ([`check_model`], [`check_memory_of`]).
+pub fn estimate_from_keys(
+    s: &Scenario,
+    card: &MaterialCard,
+    blank: BlankSize,
+) -> Result<RunEstimate, String> {
+    let on = |e: String| format!("{}: {e}", s.origin);
+    let p = &s.process;
     let tool_triangles = match &s.tools {
         ToolSet::BuiltIn(t) => {
-            // punch, die and holder each about as wide as the blank plus 10 mm, in
+            // punch, die and holder each about as wide as the blank's reach plus 10 mm, in
             // right triangles of the resolution's size
-            let reach = 0.5 * width.hypot(*length) + t.ridge_half_length() + 10.0;
+            let reach = blank.reach + t.ridge_half_length() + 10.0;
             3.0 * 2.0 * (2.0 * reach / t.resolution).powi(2)
         }
         ToolSet::Files(_) => 0.0,
     };
-    let layers = card.laminate.initial_state().thickness_stretch.len();
-    let (per_element, per_node, per_triangle) = item_bytes(layers, card.bending.is_some(), 3);
-    let blank = elements * per_element + nodes * per_node;
-    let tools = tool_triangles * per_triangle;
-    let keys = if blank >= tools {
-        RECTANGLE_KEYS
-    } else {
-        TOOL_KEYS
+    let size = RunSize {
+        elements: blank.elements as usize,
+        quads: blank.quads as usize,
+        nodes: blank.nodes as usize,
+        layers: card.laminate.initial_state().thickness_stretch.len(),
+        bending: card.bending.is_some(),
+        tools: 3,
+        tool_triangles: tool_triangles.min(usize::MAX as f64) as usize,
     };
-    estimate::check_memory(blank + tools, keys).map_err(|e| format!("{}: {e}", s.origin))
+    let blank_keys = match s.blank.shape {
+        BlankShape::Rectangle { .. } => RECTANGLE_KEYS,
+        BlankShape::File { .. } => FILE_KEYS,
+    };
+    let (per_element, per_node, per_triangle) = item_bytes(size.layers, size.bending, 3);
+    let arrays = blank.elements * per_element + blank.nodes * per_node;
+    let tools = tool_triangles * per_triangle;
+    let resident = estimate::resident_memory().unwrap_or(0.0);
+    let simulated = p.punch_speed * p.time_scaling;
+    let punch = Crosshead {
+        speed: simulated,
+        ramp_time: 0.05 * p.stroke / simulated,
+    };
+    let end_time = punch.time_to(p.stroke);
+    let threads = rayon::current_num_threads();
+    let estimate = match p.solver {
+        SolverKind::Explicit => {
+            let modulus = card
+                .laminate
+                .wave_modulus(
+                    &MembraneKinematics {
+                        c: Matrix2::identity(),
+                        c_dot: Matrix2::zeros(),
+                        temperature: p.temperature,
+                        fibres: Default::default(),
+                    },
+                    &card.laminate.initial_state(),
+                )
+                .map_err(|e| on(e.to_string()))?;
+            let membrane = blank.altitude * (card.density / modulus).sqrt();
+            let (step, added_mass_ratio) = match p.target_time_step {
+                Some(target) if target > membrane => (target, (target / membrane).powi(2) - 1.0),
+                _ => (membrane, 0.0),
+            };
+            let time_step = SAFETY * step;
+            let steps = (end_time / time_step).ceil();
+            RunEstimate {
+                size,
+                time_step,
+                steps,
+                memory: resident + arrays + tools,
+                wall_seconds: steps * (blank.elements + blank.quads)
+                    / (estimate::ELEMENT_STEPS_PER_THREAD_SECOND * threads as f64),
+                added_mass_ratio,
+            }
+        }
+        SolverKind::Implicit => {
+            let travel = p.max_increment.unwrap_or(p.stroke / DEFAULT_INCREMENTS);
+            let increments = (p.stroke / travel).ceil();
+            RunEstimate {
+                size,
+                time_step: travel / simulated,
+                steps: increments,
+                memory: resident + arrays + tools + implicit::sparse_memory_of_size(blank.nodes),
+                wall_seconds: implicit::wall_seconds_of_size(blank.elements, increments, threads),
+                added_mass_ratio: 0.0,
+            }
+        }
+    };
+    let keys = if tools > arrays && blank_keys == RECTANGLE_KEYS {
+        TOOL_KEYS
+    } else {
+        blank_keys
+    };
+    estimate::check_memory(estimate.memory, keys).map_err(on)?;
+    // the membrane's step at rest is the largest the run can take: its step count and added
+    // mass are the least the run will have, so refusing them now refuses nothing the built
+    // model would run; too few steps waits for the built model's step
+    let excessive = estimate.steps > estimate::MAX_STEPS
+        || estimate.added_mass_ratio > estimate::MAX_ADDED_MASS_RATIO;
+    if p.solver == SolverKind::Explicit && excessive {
+        let step_keys = format!("{blank_keys} or process.target_time_step (the step)");
+        estimate::check_steps(
+            &estimate,
+            (
+                &step_keys,
+                "process.punch_speed or process.time_scaling",
+                "process.target_time_step",
+            ),
+        )
+        .map_err(on)?;
+    }
+    Ok(estimate)
 }
+
+/// The explicit solver's safety factor on its stable step (`SolverSettings::time_step_safety`
+/// of a forming run).
+pub const SAFETY: f64 = 0.9;
 
 /// Refuses a blank-holder force that would press the blank harder than any composite is
 /// formed: its mean pressure over the whole blank (`blank_area`, mm^2) beyond
@@ -117,17 +269,32 @@ pub fn check_model(
     Ok(estimate)
 }
 
-/// The estimate of the built model for the implicit solver, its sparse tangent and factor
-/// counted, refused only when its memory does not fit: its increments do not follow the
-/// explicit stable step.
+/// The estimate of the built model for the implicit solver in increments of at most
+/// `max_increment` (s), its sparse tangent and factor
+/// counted ([`implicit::sparse_memory_of_size`]: the exact count would take an ordering of the
+/// tangent, seconds on large meshes), refused only when its memory does not fit: its
+/// increments do not follow the explicit stable step.
 pub fn check_memory_of(
     s: &Scenario,
     model: &Model,
     settings: &SolverSettings,
+    max_increment: f64,
 ) -> Result<RunEstimate, String> {
     let on = |e: String| format!("{}: {e}", s.origin);
     let mut estimate = estimate::estimate(model, settings).map_err(on)?;
-    estimate.memory += implicit::sparse_memory(model).map_err(on)?;
-    estimate::check_memory(estimate.memory, RECTANGLE_KEYS).map_err(on)?;
+    estimate.memory += implicit::sparse_memory_of_size(model.mesh.nodes.len() as f64);
+    estimate.time_step = max_increment;
+    estimate.steps = (settings.end_time / max_increment).ceil();
+    estimate.added_mass_ratio = 0.0;
+    estimate.wall_seconds = implicit::wall_seconds_of_size(
+        model.elements.len() as f64,
+        estimate.steps,
+        rayon::current_num_threads(),
+    );
+    let keys = match s.blank.shape {
+        BlankShape::Rectangle { .. } => RECTANGLE_KEYS,
+        BlankShape::File { .. } => FILE_KEYS,
+    };
+    estimate::check_memory(estimate.memory, keys).map_err(on)?;
     Ok(estimate)
 }

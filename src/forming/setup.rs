@@ -77,12 +77,26 @@ pub struct FormingModel {
 
 impl FormingModel {
     pub fn new(s: &Scenario) -> Result<Self, String> {
+        Self::reporting(s, &mut |_| {})
+    }
+
+    /// As [`FormingModel::new`], handing `early` the estimate from the scenario's keys
+    /// ([`preflight::estimate_from_keys`]) as soon as it is known: before the rectangle is
+    /// meshed, right after a mesh file is read, before the rest is built.
+    pub fn reporting(s: &Scenario, early: &mut dyn FnMut(&RunEstimate)) -> Result<Self, String> {
         let card = MaterialCard::load(&s.blank.card).map_err(|e| e.to_string())?;
         card.check_temperature("process.temperature", s.process.temperature)
             .map_err(|e| format!("{}: {e} ({})", s.origin, s.blank.card.display()))?;
-        preflight::check_before_mesh(s, &card)?;
+        let keyed = preflight::BlankSize::of_rectangle(s);
+        if let Some(size) = keyed {
+            early(&preflight::estimate_from_keys(s, &card, size)?);
+        }
         let thickness = card.laminate.reference_thickness();
         let (mesh, mut notes) = blank_mesh(s)?;
+        if keyed.is_none() {
+            let size = preflight::BlankSize::of_mesh(&mesh);
+            early(&preflight::estimate_from_keys(s, &card, size)?);
+        }
         let element_size = match s.blank.shape {
             BlankShape::Rectangle { element_size, .. } => element_size,
             BlankShape::File { .. } => mesh.element_size(),
@@ -150,15 +164,18 @@ impl FormingModel {
         let end_time = punch.time_to(p.stroke);
         let settings = SolverSettings {
             end_time,
-            time_step_safety: 0.9,
+            time_step_safety: preflight::SAFETY,
             target_time_step: p.target_time_step,
             output_interval: end_time / s.output.history_points as f64,
             damping: 0.0,
             yarn_damping: 0.06,
         };
+        let max_increment = p.max_increment.unwrap_or(p.stroke / DEFAULT_INCREMENTS) / punch.speed;
         let estimate = match p.solver {
             SolverKind::Explicit => preflight::check_model(s, &model, &settings, punch.speed)?,
-            SolverKind::Implicit => preflight::check_memory_of(s, &model, &settings)?,
+            SolverKind::Implicit => {
+                preflight::check_memory_of(s, &model, &settings, max_increment)?
+            }
         };
         let flange_radius = match &s.tools {
             ToolSet::BuiltIn(t) => t.die_opening_radius + t.die_fillet_radius,
@@ -170,7 +187,7 @@ impl FormingModel {
             punch,
             settings,
             solver: p.solver,
-            max_increment: p.max_increment.unwrap_or(p.stroke / DEFAULT_INCREMENTS) / punch.speed,
+            max_increment,
             flange_radius,
             ridge_half_length: s.ridge_half_length(),
             element_size,

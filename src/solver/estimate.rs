@@ -81,6 +81,22 @@ impl RunEstimate {
     }
 }
 
+impl RunEstimate {
+    /// The line printed before an implicit run: its increments at most, memory and wall time.
+    pub fn describe_increments(&self) -> String {
+        format!(
+            "estimate: implicit quasi-static run at the physical punch speed, about {:.0} \
+             increments of at most {:.3e} s on {} elements, {} of memory, about {} on {} threads",
+            self.steps,
+            self.time_step,
+            self.size.elements,
+            format_bytes(self.memory),
+            format_seconds(self.wall_seconds),
+            rayon::current_num_threads(),
+        )
+    }
+}
+
 /// Bytes a heap allocation of `bytes` takes (the allocator's header and rounding).
 fn heap(bytes: usize) -> usize {
     bytes.max(24).next_multiple_of(16) + 16

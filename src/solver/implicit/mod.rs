@@ -464,6 +464,28 @@ pub fn sparse_memory(model: &Model) -> Result<f64, String> {
     Ok(SPARSE_ENTRY_BYTES * entries as f64)
 }
 
+/// The memory (bytes) of the sparse tangent and its factor for a sheet of `nodes` nodes, from
+/// the count alone, before the mesh is made: `b n (log2 n - c)` **(fit** of [`sparse_memory`]
+/// on the hemisphere's quadrilaterals with bending, 441 to 40,401 nodes: within 4 %; nested
+/// dissection's fill grows as `n log n` on a planar mesh). The count is what the key-based
+/// estimate needs; [`sparse_memory`] is the exact figure, at the price of an ordering.
+pub fn sparse_memory_of_size(nodes: f64) -> f64 {
+    SPARSE_BYTES_PER_NODE_DOUBLING * nodes * (nodes.max(2.0).log2() - SPARSE_LOG_OFFSET).max(1.0)
+}
+
+/// `b` and `c` of [`sparse_memory_of_size`] (bytes, doublings).
+const SPARSE_BYTES_PER_NODE_DOUBLING: f64 = 5200.0;
+const SPARSE_LOG_OFFSET: f64 = 6.2;
+
+/// The wall time (s) of an implicit forming run of `elements` cells in `increments` increments
+/// on `threads` threads, good to a factor of about 3: `(1 + 38 (N / 5041)^1.6) increments / 60`
+/// on 2 threads, the hemisphere's measured growth (docs/performance.md: 1.8 s on 400 cells,
+/// 7 s on 1,600, 38 s on 5,041, 366 s on 20,164, in about 60 increments).
+pub fn wall_seconds_of_size(elements: f64, increments: f64, threads: usize) -> f64 {
+    let on_two = 1.0 + 38.0 * (elements / 5041.0).powf(1.6);
+    on_two * (increments / 60.0) * 2.0 / threads.max(1) as f64
+}
+
 /// The smallest force scale of the convergence test, as a fraction of `G t0 h` (the force that
 /// shears an element of size `h` by one radian): before anything is loaded the residual is
 /// measured against it, not against forces that are still zero.
