@@ -240,7 +240,7 @@ fn the_quarter_example_reports_its_mesh() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{stderr}");
     // the file's 100 quadrangles, one element each
-    assert!(stderr.contains(" of 100 elements"), "{stderr}");
+    assert!(stderr.contains(" on 100 elements"), "{stderr}");
     assert!(!stderr.contains("split"), "{stderr}");
     assert!(dir.join("formed-blank.inp").exists());
 }

@@ -239,18 +239,48 @@ fn bias_extension_matches_the_explicit_solver() {
     test.process.history_points = 5;
     let explicit = test.run(&card.laminate, card.density, None, None).unwrap();
     let implicit = finished(&on_implicit(&test, |t| &mut t.process));
-    assert_eq!(explicit.run.records.len(), implicit.run.records.len());
-    for (e, i) in explicit.run.records.iter().zip(&implicit.run.records) {
-        let (e, i) = (e.reading, i.reading);
-        assert!(
-            (e.displacement - i.displacement).abs() < 1e-3,
-            "{e:?} {i:?}"
-        );
+    let readings: Vec<(f64, f64, f64)> = implicit
+        .run
+        .records
+        .iter()
+        .map(|r| {
+            (
+                r.reading.displacement,
+                r.reading.force,
+                r.reading.shear_angle,
+            )
+        })
+        .collect();
+    let mut compared = 0;
+    for e in explicit.run.records.iter().map(|r| r.reading) {
         if e.displacement > 5.0 {
-            assert!((i.force / e.force - 1.0).abs() < 0.05, "{e:?} {i:?}");
-            assert!((i.shear_angle - e.shear_angle).abs() < 0.3, "{e:?} {i:?}");
+            let (force, shear_angle) = at_displacement(&readings, e.displacement);
+            assert!((force / e.force - 1.0).abs() < 0.05, "{e:?} {force}");
+            assert!(
+                (shear_angle - e.shear_angle).abs() < 0.3,
+                "{e:?} {shear_angle}"
+            );
+            compared += 1;
         }
     }
+    assert!(compared >= 3, "{compared}");
+}
+
+/// The force and shear angle of `readings` (displacement, force, shear angle; displacements
+/// rising) at displacement `d`, linearly between the two readings about it: the implicit
+/// solver records at the ends of its own increments, not at the explicit solver's times.
+fn at_displacement(readings: &[(f64, f64, f64)], d: f64) -> (f64, f64) {
+    let after = readings
+        .iter()
+        .position(|r| r.0 >= d)
+        .unwrap_or_else(|| panic!("no reading at or past {d} mm"));
+    let b = readings[after];
+    if after == 0 || b.0 == d {
+        return (b.1, b.2);
+    }
+    let a = readings[after - 1];
+    let w = (d - a.0) / (b.0 - a.0);
+    (a.1 + w * (b.1 - a.1), a.2 + w * (b.2 - a.2))
 }
 
 /// `test` run on the T300/PPS card, which must reach its end.
@@ -282,17 +312,16 @@ fn against_explicit<T: SheetTest + Clone>(
 ) -> (f64, f64) {
     let explicit = finished(test);
     let implicit = finished(&on_implicit(test, process));
-    assert_eq!(explicit.rows.len(), implicit.rows.len());
+    let readings: Vec<(f64, f64, f64)> = implicit.rows.iter().map(&reading).collect();
     let last = reading(explicit.rows.last().unwrap()).1;
     explicit
         .rows
         .iter()
-        .zip(&implicit.rows)
-        .map(|(a, b)| (reading(a), reading(b)))
-        .filter(|(a, _)| a.1 > 0.1 * last)
-        .map(|(a, b)| {
-            assert!((a.0 - b.0).abs() < 1e-3, "displacements {} {}", a.0, b.0);
-            ((b.1 / a.1 - 1.0).abs(), (b.2 - a.2).abs())
+        .map(&reading)
+        .filter(|a| a.1 > 0.1 * last)
+        .map(|a| {
+            let (force, shear) = at_displacement(&readings, a.0);
+            ((force / a.1 - 1.0).abs(), (shear - a.2).abs())
         })
         .fold((0.0, 0.0), |(f, g), (df, dg)| (f.max(df), g.max(dg)))
 }
@@ -391,10 +420,12 @@ impl Observer for Last {
 /// docs/solver.md, "Entering contact": a free sheet pressed by a plate under a force of 5 N
 /// onto a floor 0.04 mm below it (frictionless, no bending). The sheet moves as a rigid body, so
 /// the incremental potential is piecewise quadratic: drag, plate and floor springs. Newton's
-/// correction with the floor's springs anticipated is then the exact solution, and the first
-/// increment converges in two iterations (the step and the check that it is solved); without
-/// them the correction carries the sheet through the floor (measured: four iterations, one on
-/// the projected tangent). The floor ends up carrying the plate's force.
+/// correction with the floor's springs anticipated is then the exact solution, and the plate's
+/// closing before the clock starts (docs/solver.md, "Force-driven tools") converges in two
+/// iterations (the step and the check that it is solved); without them the correction carries
+/// the sheet through the floor (measured: four iterations, one on the projected tangent). The
+/// one increment of the whole second then starts solved (one iteration), and the floor ends
+/// up carrying the plate's force.
 #[test]
 fn a_sheet_pressed_onto_a_floor_is_solved_in_one_newton_step() {
     let card = MaterialCard::load(&repo_path("tests/data/stiff-yarn-fabric.toml")).unwrap();
@@ -417,13 +448,14 @@ fn a_sheet_pressed_onto_a_floor_is_solved_in_one_newton_step() {
     let mut last = Last(None);
     let mut stats = ImplicitStatistics::default();
     implicit::run(&model, &settings, &mut last, &mut stats).unwrap();
-    // one increment of the whole second (the first increment is a quarter of the largest)
+    // the closing, then one increment of the whole second (the first increment is a quarter
+    // of the largest)
     assert_eq!(
         (stats.increments, stats.cut_increments),
-        (1, 0),
+        (2, 0),
         "{stats:?}"
     );
-    assert_eq!(stats.iterations, 2, "{stats:?}");
+    assert_eq!(stats.iterations, 2 + 1, "{stats:?}");
     let state = last.0.unwrap();
     let floor = state.tool_loads[0].normal_force;
     // within the residual tolerance, 1e-4 of the forces

@@ -28,6 +28,12 @@ pub struct Args {
     threads: Option<usize>,
 }
 
+/// Cells from which the estimate from the scenario's keys is printed before the set-up: the
+/// set-up of such a blank takes seconds (its bending patches choose their nodes at about a
+/// millisecond a cell), of a smaller one a fraction of a second, after which the estimate of
+/// the built model is printed anyway.
+const EARLY_ESTIMATE_ELEMENTS: usize = 5_000;
+
 /// The estimate's line: the explicit solver's steps, or the implicit solver's increments.
 fn describe(estimate: &RunEstimate, solver: SolverKind) -> String {
     match solver {
@@ -44,10 +50,12 @@ fn forming(args: &Args) -> anyhow::Result<()> {
     let interrupt = Interrupt::install()?;
     let (scenario, dir) = args.scenario.load()?;
     let forming = FormingModel::reporting(&scenario, &mut |estimate| {
-        eprintln!(
-            "{} (from the scenario, before set-up)",
-            describe(estimate, scenario.process.solver)
-        );
+        if estimate.size.elements >= EARLY_ESTIMATE_ELEMENTS {
+            eprintln!(
+                "{} (from the scenario, before set-up; Ctrl-C stops it)",
+                describe(estimate, scenario.process.solver)
+            );
+        }
     })
     .map_err(|e| anyhow::anyhow!(e))?;
     let stop = interrupt.running();

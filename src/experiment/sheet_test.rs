@@ -504,6 +504,7 @@ pub fn run_sheet_test(
         Ok((force_bound, loaded_work)) => {
             let check = CheckSettings {
                 settle_time,
+                end_time: settings.end_time,
                 force_bound,
                 loaded_work,
                 dynamic_advice: match solver {

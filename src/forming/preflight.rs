@@ -182,14 +182,12 @@ pub fn estimate_from_keys(
         blank_keys
     };
     estimate::check_memory(estimate.memory, keys).map_err(on)?;
-    // the membrane's step at rest is the largest the run can take: its step count and added
-    // mass are the least the run will have, so refusing them now refuses nothing the built
-    // model would run; too few steps waits for the built model's step
-    let excessive = estimate.steps > estimate::MAX_STEPS
-        || estimate.added_mass_ratio > estimate::MAX_ADDED_MASS_RATIO;
-    if p.solver == SolverKind::Explicit && excessive {
+    if p.solver == SolverKind::Explicit {
+        // the membrane's step at rest is the largest the run can take: its step count and
+        // added mass are the least the run will have, so refusing them now refuses nothing the
+        // built model would run; too few steps waits for the built model's step
         let step_keys = format!("{blank_keys} or process.target_time_step (the step)");
-        estimate::check_steps(
+        estimate::check_excess(
             &estimate,
             (
                 &step_keys,

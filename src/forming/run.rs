@@ -198,6 +198,7 @@ pub fn run(
 fn check_settings(forming: &FormingModel) -> Result<CheckSettings, String> {
     Ok(CheckSettings {
         settle_time: 2.0 * forming.punch.ramp_time,
+        end_time: forming.settings.end_time,
         force_bound: checks::force_bound(&forming.model)?,
         loaded_work: checks::carried_kinetic_energy(
             &forming.model,

@@ -18,12 +18,14 @@ use nalgebra::Vector3;
 pub const KINETIC_WARNING: f64 = 0.05;
 
 /// Kinetic energy over internal work above which the run is dynamic, not a forming or a test:
-/// half the work put in still moving. Stopped when it lasts [`KINETIC_STOP_RECORDS`]
-/// checkpoints in a row, so that one caught on a contact impact does not stop a sound run.
+/// half the work put in still moving. Stopped when it lasts [`KINETIC_STOP_SPAN`] of the run,
+/// so that a contact impact does not stop a sound run, however often the checks look.
 pub const KINETIC_STOP: f64 = 0.5;
 
-/// Consecutive checkpoints past [`KINETIC_STOP`] that stop the run.
-pub const KINETIC_STOP_RECORDS: usize = 5;
+/// Fraction of the run's duration over which the kinetic energy must stay past
+/// [`KINETIC_STOP`] to stop the run (it was 5 records in a row, which made the stop depend on
+/// how often a run records: 5 % of the run at the default 100 records).
+pub const KINETIC_STOP_SPAN: f64 = 0.05;
 
 /// Energy balance error `|W_ext - W_int - E_kin - W_damp| / W_ext` reported as a warning. The
 /// solver stops a run at 50 % (a blow-up); a sound run stays within a few per cent.
@@ -119,6 +121,8 @@ pub struct CheckSettings {
     /// Internal work from which the kinetic energy may stop the run (N·mm),
     /// [`carried_kinetic_energy`].
     pub loaded_work: f64,
+    /// The run's duration (s): [`KINETIC_STOP_SPAN`] of it stops a dynamic run.
+    pub end_time: f64,
     /// What to change when the run is too dynamic, for the messages ("lower --speed ...").
     pub dynamic_advice: &'static str,
 }
@@ -247,7 +251,8 @@ struct Watch {
     nodes: usize,
     /// Time and energies of every checkpoint.
     records: Vec<(f64, Energies)>,
-    kinetic_run: usize,
+    /// Since when (s) the kinetic energy has been past [`KINETIC_STOP`] at every checkpoint.
+    kinetic_since: Option<f64>,
     largest_force: f64,
     most_tunnelled: usize,
     stop: Option<&'static str>,
@@ -259,7 +264,7 @@ impl Watch {
             settings,
             nodes,
             records: Vec::new(),
-            kinetic_run: 0,
+            kinetic_since: None,
             largest_force: 0.0,
             most_tunnelled: 0,
             stop: None,
@@ -313,20 +318,21 @@ impl Watch {
         }
         let ratio = kinetic_ratio(e);
         let loaded = settled && e.internal_work >= self.settings.loaded_work;
-        self.kinetic_run = if loaded && ratio > KINETIC_STOP {
-            self.kinetic_run + 1
+        self.kinetic_since = if loaded && ratio > KINETIC_STOP {
+            self.kinetic_since.or(Some(state.time))
         } else {
-            0
+            None
         };
-        if self.kinetic_run >= KINETIC_STOP_RECORDS {
+        let span = KINETIC_STOP_SPAN * self.settings.end_time;
+        if let Some(since) = self.kinetic_since.filter(|&t| state.time - t >= span) {
             return Err(stop(
                 KINETIC,
                 format!(
-                    "the kinetic energy is {:.0} % of the internal work ({} checks in a row \
-                     above {:.0} %): the run is dynamic, not quasi-static",
+                    "the kinetic energy is {:.0} % of the internal work, above {:.0} % since \
+                     t = {since:.4e} s ({:.0} % of the run): the run is dynamic, not quasi-static",
                     100.0 * ratio,
-                    KINETIC_STOP_RECORDS,
-                    100.0 * KINETIC_STOP
+                    100.0 * KINETIC_STOP,
+                    100.0 * KINETIC_STOP_SPAN
                 ),
                 self.settings.dynamic_advice,
             ));
@@ -358,11 +364,12 @@ impl Watch {
             }
         };
         let final_work = self.records.last().map_or(0.0, |r| r.1.internal_work);
-        let loaded = self.records.iter().filter(|(t, e)| {
+        let loaded_records = self.records.iter().filter(|(t, e)| {
             *t > self.settings.settle_time
                 && e.internal_work > 0.0
                 && e.internal_work >= LOADED_FRACTION * final_work
         });
+        let loaded = loaded_records.clone();
         let kinetic = loaded
             .clone()
             .map(|(_, e)| kinetic_ratio(e))
@@ -407,10 +414,8 @@ impl Watch {
                 status: status(FORCES, false),
             },
         ];
-        let damping = self
-            .records
-            .iter()
-            .filter(|(t, e)| *t > self.settings.settle_time && e.internal_work > 0.0)
+        let damping = loaded_records
+            .clone()
             .map(|(_, e)| e.damping / e.internal_work)
             .fold(0.0, f64::max);
         if damping > 0.0 {
@@ -517,6 +522,7 @@ mod tests {
             settle_time: 0.1,
             force_bound: 1e6,
             loaded_work: 0.0,
+            end_time: 1.0,
             dynamic_advice: "",
         };
         let mut w = Watch::new(settings, 10);

@@ -238,17 +238,27 @@ pub fn check_steps(
     estimate: &RunEstimate,
     (step_keys, speed_keys, mass_keys): (&str, &str, &str),
 ) -> Result<(), String> {
-    if estimate.steps.is_nan() || estimate.steps > MAX_STEPS {
-        return Err(format!(
-            "the run would take {:.3e} steps of {:.3e} s (more than {MAX_STEPS:.0e}): raise \
-             {speed_keys}, or {step_keys}",
-            estimate.steps, estimate.time_step
-        ));
-    }
+    check_excess(estimate, (step_keys, speed_keys, mass_keys))?;
     if estimate.steps < MIN_TRAVEL_STEPS {
         return Err(format!(
             "the travel would be covered in {:.0} steps of {:.3e} s (fewer than {MIN_TRAVEL_STEPS}): \
              the sheet cannot follow and the result is an impact; lower {speed_keys}",
+            estimate.steps, estimate.time_step
+        ));
+    }
+    Ok(())
+}
+
+/// The refusals of [`check_steps`] that a lower bound of the steps and of the added mass can
+/// make: more than [`MAX_STEPS`] steps, mass scaling past [`MAX_ADDED_MASS_RATIO`].
+pub fn check_excess(
+    estimate: &RunEstimate,
+    (step_keys, speed_keys, mass_keys): (&str, &str, &str),
+) -> Result<(), String> {
+    if estimate.steps.is_nan() || estimate.steps > MAX_STEPS {
+        return Err(format!(
+            "the run would take {:.3e} steps of {:.3e} s (more than {MAX_STEPS:.0e}): raise \
+             {speed_keys}, or {step_keys}",
             estimate.steps, estimate.time_step
         ));
     }

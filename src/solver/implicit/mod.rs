@@ -22,6 +22,7 @@ pub mod contact_entry;
 pub mod linear;
 mod supernodal;
 
+use super::energy::Energies;
 use super::explicit::{elastic_energy, positive_setting, Observer, SolverError, State};
 use super::model::{Model, Motion};
 use crate::contact::potential::{penalty_stiffness, FrictionLag};
@@ -224,15 +225,23 @@ pub fn run(
         previous_reactions: vec![Vector3::zeros(); n],
         previous_contact: vec![Vector3::zeros(); n],
     };
+    let max_increment = settings
+        .max_increment
+        .unwrap_or(settings.end_time / DEFAULT_INCREMENTS);
+    let mut dt = 0.25 * max_increment;
+    close_force_driven_tools(
+        &evaluator,
+        &mut work,
+        (&mut state, &mut converged),
+        settings.end_time,
+        settings,
+        stats,
+    );
     observer
         .record(model, &state)
         .and_then(|()| observer.checkpoint(model, &state))
         .map_err(|source| SolverError::Output { time: 0.0, source })?;
-    let max_increment = settings
-        .max_increment
-        .unwrap_or(settings.end_time / DEFAULT_INCREMENTS);
     let min_increment = 1e-6 * settings.end_time;
-    let mut dt = 0.25 * max_increment;
     let mut next_output = settings.output_interval;
     let mut recorded = 0.0;
     while state.time < settings.end_time * (1.0 - 1e-12) {
@@ -545,6 +554,57 @@ fn seat_force_driven_tools(model: &Model, layout: &Layout, state: &mut State) {
             state.tool_translations[k] += axis * depth;
         }
     }
+}
+
+/// Closes the force-driven tools (a blank holder, seated on the blank) onto the blank before
+/// the stroke starts, as a press closes its holder before the punch moves: one increment of
+/// `dt` (the run's duration: the holder closes as slowly as the punch then forms, so that the
+/// matrix's viscous stress of the closing has relaxed) with every prescribed motion held where
+/// it is, the flange pressed into the die's
+/// contact springs until the holder's force is carried. The clock, the velocities and the
+/// energies then start from zero, so that the work of this closing, which goes into the
+/// contact springs and no force of the forming does, is not booked against the blank's
+/// energy balance. Where it does not converge the run starts from the seated tools as they
+/// are, and its first increment closes them.
+fn close_force_driven_tools(
+    evaluator: &Evaluator,
+    work: &mut Workspace,
+    (state, converged): (&mut State, &mut Converged),
+    dt: f64,
+    settings: &ImplicitSettings,
+    stats: &mut ImplicitStatistics,
+) {
+    let model = evaluator.model;
+    let driven = |t: &RigidTool| matches!(t.motion, ToolMotion::Force { .. });
+    if !model.tools.iter().any(driven) {
+        return;
+    }
+    let held = (state.positions.clone(), state.tool_translations.clone());
+    let Ok((evaluation, x, translations, _)) = newton(
+        evaluator,
+        work,
+        (state, converged),
+        dt,
+        held,
+        settings,
+        stats,
+    ) else {
+        return;
+    };
+    accept(
+        model,
+        evaluator.layout,
+        state,
+        converged,
+        (evaluation, x, translations),
+        dt,
+    );
+    stats.increments += 1;
+    state.time = 0.0;
+    state.energies = Energies::default();
+    state.velocities.fill(Vector3::zeros());
+    state.tool_velocities.fill(Vector3::zeros());
+    state.tool_impulses.fill(Vector3::zeros());
 }
 
 /// The prescribed position of every node at `t` after an increment `dt` from `positions`, and
