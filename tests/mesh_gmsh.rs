@@ -605,21 +605,31 @@ fn malformed_ascii_files_name_the_file_the_line_and_what_was_expected() {
         "never closed",
     );
     // quadrangle 22 with a repeated node, crossing itself, re-entrant at node 50 (moved to
-    // (0.6, 0.3), where quadrangle 21 stays convex), of no area
+    // (0.6, 0.3), where quadrangle 21 stays convex), on one node twice over: at its line
     let folded = "element 22 is a quadrilateral that is not convex";
     for (bytes, error) in [
-        (replaced("22 20 30 60 50", "22 20 30 30 50"), folded),
+        (
+            replaced("22 20 30 60 50", "22 20 30 30 50"),
+            "element 22 names node 30 twice",
+        ),
         (replaced("22 20 30 60 50", "22 20 30 50 60"), folded),
         (replaced("0.6 1 0", "0.6 0.3 0"), folded),
         (
             replaced("22 20 30 60 50", "22 20 30 30 20"),
-            "element 22 is degenerate (area 0e0 mm^2)",
+            "element 22 names node 30 twice",
         ),
     ] {
         let e = parse_msh(&bytes, "broken.msh").unwrap_err();
-        assert_eq!((e.file.as_str(), e.line), ("broken.msh", None), "{e}");
+        assert_eq!((e.file.as_str(), e.line), ("broken.msh", Some(46)), "{e}");
         assert!(e.message.contains(error), "{e}");
     }
+    // a node at 1e200 is named at its line, not found as an element of no area
+    let e = parse_msh(&replaced("0.6 1 0", "0.6 1e200 0"), "broken.msh").unwrap_err();
+    assert_eq!((e.file.as_str(), e.line), ("broken.msh", Some(37)), "{e}");
+    assert!(
+        e.message.contains("node 50 lies at (0.6, 1e200, 0) mm"),
+        "{e}"
+    );
     // no $Elements at all
     let text = &SQUARE[..SQUARE.find("$Elements").unwrap()];
     let e = parse_msh(text.as_bytes(), "broken.msh").unwrap_err();
