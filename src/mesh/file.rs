@@ -38,8 +38,13 @@ impl MeshImport {
     /// numbered against their neighbours turned round. Also returns the reader's notes, and
     /// what was turned and the pieces where there is more than one.
     pub fn into_blank(self) -> Result<(Mesh, Vec<String>), MeshFileError> {
-        let origin = &self.origin;
-        if let Some(t) = self.rigid.iter().position(|&r| r) {
+        let MeshImport {
+            mut mesh,
+            rigid,
+            mut notes,
+            origin,
+        } = self;
+        if let Some(t) = rigid.iter().position(|&r| r) {
             return Err(origin.error_at(
                 Item::Cell(t),
                 "is a rigid element (R3D3/R3D4): a blank is made of shell or membrane elements \
@@ -47,8 +52,7 @@ impl MeshImport {
                  tool)",
             ));
         }
-        let sheet = conformity::check(&self.mesh).map_err(|d| origin.defect(&d))?;
-        let mut notes = self.notes.clone();
+        let sheet = conformity::check(&mesh).map_err(|d| origin.defect(&d))?;
         // the notes are printed after the name of the file read first
         let names = origin.names(Some(0));
         if !sheet.turned.is_empty() {
@@ -57,7 +61,7 @@ impl MeshImport {
                  to agree with them (first: {}): every shared edge now runs once each way, the \
                  numbering kept being that of most of the area",
                 sheet.turned.len(),
-                self.mesh.cells.len(),
+                mesh.cells.len(),
                 first_few(sheet.turned.iter().map(|&t| names.name_at(Item::Cell(t))))
             ));
         }
@@ -74,7 +78,6 @@ impl MeshImport {
                 }))
             ));
         }
-        let mut mesh = self.mesh;
         sheet.orient(&mut mesh);
         Ok((mesh, notes))
     }
