@@ -675,6 +675,30 @@ fn malformed_binary_files_name_the_byte_or_the_header_line() {
     let e = parse_msh(&bad, "broken.msh").unwrap_err();
     assert_eq!(e.line, None, "{e}");
     assert!(e.message.contains("byte"), "{e}");
+    // node 60 (the first of $Nodes, after 32 bytes of counts, the block's 12 and 16) at 1e200,
+    // and quadrangle 22 on node 30 twice: each named with the byte where it starts
+    let mut far = good.clone();
+    far[nodes + 68..nodes + 76].copy_from_slice(&1e200f64.to_le_bytes());
+    let e = parse_msh(&far, "broken.msh").unwrap_err();
+    assert_eq!(e.line, None, "{e}");
+    assert!(
+        e.message.starts_with("node 60 lies at (1, 1e200, 0) mm")
+            && e.message
+                .ends_with(&format!("(byte {} of the file)", nodes + 60)),
+        "{e}"
+    );
+    let elements = good.windows(10).position(|w| w == b"$Elements\n").unwrap() + 10;
+    // counts 32, line block 12 + 8 + 24, quadrangle block 12 + 8, quadrangle 21 40 bytes
+    let quadrangle = elements + 32 + 44 + 20 + 40;
+    let mut twice = good.clone();
+    twice[quadrangle + 24..quadrangle + 32].copy_from_slice(&30u64.to_le_bytes());
+    let e = parse_msh(&twice, "broken.msh").unwrap_err();
+    assert!(
+        e.message.starts_with("element 22 names node 30 twice")
+            && e.message
+                .ends_with(&format!("(byte {quadrangle} of the file)")),
+        "{e}"
+    );
 }
 
 fn mutated(base: Vec<u8>) -> impl Strategy<Value = Vec<u8>> {

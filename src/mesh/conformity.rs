@@ -647,7 +647,7 @@ fn check_nodes_on_cells(mesh: &Mesh, edges: &Edges, longest: &[f64]) -> Result<(
     let grid = Grid::new(&boxes, median(longest));
     let mut first: Option<Defect> = None;
     let nodes = (0..mesh.nodes.len()).filter(|&n| node_size[n].is_finite());
-    for (node, t) in grid.pairs(nodes.map(|n| (n, mesh.nodes[n]))) {
+    grid.for_each_pair(nodes.map(|n| (n, mesh.nodes[n])), |node, t| {
         let p = &mesh.nodes[node];
         let (lo, hi) = &boxes[t];
         let cell = &mesh.cells[t];
@@ -655,11 +655,11 @@ fn check_nodes_on_cells(mesh: &Mesh, edges: &Edges, longest: &[f64]) -> Result<(
             || (0..3).any(|d| p[d] < lo[d] || p[d] > hi[d])
             || matches!(first.as_ref().map(Defect::subject), Some(Item::Node(n)) if n <= node)
         {
-            continue;
+            return;
         }
         let tolerance = ON_CELL * longest[t].min(node_size[node]);
         first = match contact(mesh, cell, p, tolerance) {
-            None => continue,
+            None => return,
             Some(Contact::Corner(other)) => Some(Defect::Coincident {
                 node,
                 other,
@@ -672,7 +672,7 @@ fn check_nodes_on_cells(mesh: &Mesh, edges: &Edges, longest: &[f64]) -> Result<(
             }),
             Some(Contact::Edge(..) | Contact::Inside) => Some(Defect::Overlap { node, cell: t }),
         };
-    }
+    });
     match first {
         Some(defect) => Err(defect),
         None => Ok(()),
@@ -795,28 +795,28 @@ impl Grid {
         std::array::from_fn(|d| ((p[d] + self.shift) / self.side).floor() as i64)
     }
 
-    /// Each point of `points` with each cell listed in its cube: the points sorted by their
-    /// cubes' hashes and walked along the sorted entries, rather than looked up one by one.
-    fn pairs(
+    /// Calls `visit(point, cell)` for each point of `points` and each cell listed in its cube:
+    /// the points sorted by their cubes' hashes and walked along the sorted entries, rather
+    /// than looked up one by one.
+    fn for_each_pair(
         &self,
         points: impl Iterator<Item = (usize, Vector3<f64>)>,
-    ) -> impl Iterator<Item = (usize, usize)> + '_ {
+        mut visit: impl FnMut(usize, usize),
+    ) {
         let mut keyed: Vec<(u64, usize)> = points.map(|(n, p)| (hash(self.cube(&p)), n)).collect();
         keyed.sort_unstable();
         let mut start = 0;
-        keyed
-            .chunk_by(|a, b| a.0 == b.0)
-            .flat_map(|group| {
-                let key = group[0].0;
-                start += self.entries[start..].partition_point(|e| e.0 < key);
-                let cells = &self.entries[start..];
-                let count = cells.partition_point(|e| e.0 == key);
-                group
-                    .iter()
-                    .flat_map(move |&(_, n)| cells[..count].iter().map(move |&(_, t)| (n, t)))
-            })
-            .collect::<Vec<_>>()
-            .into_iter()
+        for group in keyed.chunk_by(|a, b| a.0 == b.0) {
+            let key = group[0].0;
+            start += self.entries[start..].partition_point(|e| e.0 < key);
+            let cells = &self.entries[start..];
+            let cells = &cells[..cells.partition_point(|e| e.0 == key)];
+            for &(_, n) in group {
+                for &(_, t) in cells {
+                    visit(n, t);
+                }
+            }
+        }
     }
 }
 
