@@ -9,12 +9,14 @@
 //! hanging node or an unmerged seam is a slit that opens under load, a duplicate or folded cell
 //! doubles the sheet's stiffness and mass, a sliver collapses the explicit time step.
 //!
-//! The checks run in that order and stop at the first defect (in the order of the cells, or of
-//! the nodes), so that the message names its root cause: a hanging node, say, also leaves the
-//! cells at the ends of its edge touching at a point only, which is reported only when nothing
-//! else is wrong. Cost: O(n log n) in the number of cells — one map of the edges, a
-//! breadth-first pass for the orientation, a union-find over the corners, and one query per
-//! node of a uniform grid over the cells.
+//! The checks run in this order — single nodes and cells (coordinates, distinct corners,
+//! slivers, specks), duplicates, edges, orientation, folds, nodes on cells, the cells around
+//! each node — and stop at the first defect (in the order of the cells, or of the nodes), so
+//! that the message names its root cause: a hanging node, say, also leaves the cells at the
+//! ends of its edge touching at a point only, which is reported only when nothing else is
+//! wrong. Cost: O(n log n) in the number of cells — one sort of the edges, a breadth-first pass
+//! for the orientation, a uniform grid over the cells walked once with the nodes, and a
+//! union-find over the corners.
 
 use super::{six_digits, Cell, Mesh};
 use nalgebra::Vector3;
