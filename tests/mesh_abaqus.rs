@@ -11,6 +11,7 @@ use thermostamp::mesh::abaqus::{
     parse_inp, read_inp, read_inp_with_thickness, write_inp, write_inp_to, AbaqusMesh,
     ElementOutput, MAX_FIELD,
 };
+use thermostamp::mesh::conformity::COORDINATE_LIMIT;
 use thermostamp::mesh::{rectangle, Cell, DiagonalPattern, Mesh, MeshFileError};
 
 /// Reads the first of `files` (path, text), the others being what it may include.
@@ -730,10 +731,10 @@ fn malformed_decks_fail_naming_the_file_and_line() {
             &["axis 1", "axis 3"],
         ),
         (
-            "degenerate element",
+            "element on one node twice",
             vec![("d.inp", &texts[14])],
             ("d.inp", Some(8)),
-            &["element 7", "degenerate"],
+            &["element 7", "names node 2 twice"],
         ),
         (
             "several parts",
@@ -943,7 +944,8 @@ proptest! {
     /// Any coordinates, warp directions and thicknesses: every numeric field of the deck has at
     /// most 20 characters, no data line more than 16 entries, no line more than 256
     /// characters (the Abaqus input rules, which CalculiX shares), and the deck reads back
-    /// within the precision written.
+    /// within the precision written — or, with a coordinate beyond the readers' limit, is
+    /// refused naming the node.
     #[test]
     fn every_field_of_a_written_deck_fits_abaqus_and_reads_back(
         scale in any_magnitude(),
@@ -978,6 +980,11 @@ proptest! {
             for field in fields.iter().filter(|f| f.parse::<f64>().is_ok()) {
                 prop_assert!(field.len() <= MAX_FIELD, "{field} in {line}");
             }
+        }
+        if mesh.nodes.iter().any(|x| x.amax() > COORDINATE_LIMIT) {
+            let e = parse(&[("deck.inp", &text)]).unwrap_err();
+            prop_assert!(e.message.contains("beyond 1e6 mm of the origin"), "{e}");
+            return Ok(());
         }
         let read = deck(&text);
         prop_assert_eq!(&read.import.mesh.cells, &mesh.cells);

@@ -605,21 +605,31 @@ fn malformed_ascii_files_name_the_file_the_line_and_what_was_expected() {
         "never closed",
     );
     // quadrangle 22 with a repeated node, crossing itself, re-entrant at node 50 (moved to
-    // (0.6, 0.3), where quadrangle 21 stays convex), of no area
+    // (0.6, 0.3), where quadrangle 21 stays convex), on one node twice over: at its line
     let folded = "element 22 is a quadrilateral that is not convex";
     for (bytes, error) in [
-        (replaced("22 20 30 60 50", "22 20 30 30 50"), folded),
+        (
+            replaced("22 20 30 60 50", "22 20 30 30 50"),
+            "element 22 names node 30 twice",
+        ),
         (replaced("22 20 30 60 50", "22 20 30 50 60"), folded),
         (replaced("0.6 1 0", "0.6 0.3 0"), folded),
         (
             replaced("22 20 30 60 50", "22 20 30 30 20"),
-            "element 22 is degenerate (area 0e0 mm^2)",
+            "element 22 names node 30 twice",
         ),
     ] {
         let e = parse_msh(&bytes, "broken.msh").unwrap_err();
-        assert_eq!((e.file.as_str(), e.line), ("broken.msh", None), "{e}");
+        assert_eq!((e.file.as_str(), e.line), ("broken.msh", Some(46)), "{e}");
         assert!(e.message.contains(error), "{e}");
     }
+    // a node at 1e200 is named at its line, not found as an element of no area
+    let e = parse_msh(&replaced("0.6 1 0", "0.6 1e200 0"), "broken.msh").unwrap_err();
+    assert_eq!((e.file.as_str(), e.line), ("broken.msh", Some(37)), "{e}");
+    assert!(
+        e.message.contains("node 50 lies at (0.6, 1e200, 0) mm"),
+        "{e}"
+    );
     // no $Elements at all
     let text = &SQUARE[..SQUARE.find("$Elements").unwrap()];
     let e = parse_msh(text.as_bytes(), "broken.msh").unwrap_err();
@@ -665,6 +675,30 @@ fn malformed_binary_files_name_the_byte_or_the_header_line() {
     let e = parse_msh(&bad, "broken.msh").unwrap_err();
     assert_eq!(e.line, None, "{e}");
     assert!(e.message.contains("byte"), "{e}");
+    // node 60 (the first of $Nodes, after 32 bytes of counts, the block's 12 and 16) at 1e200,
+    // and quadrangle 22 on node 30 twice: each named with the byte where it starts
+    let mut far = good.clone();
+    far[nodes + 68..nodes + 76].copy_from_slice(&1e200f64.to_le_bytes());
+    let e = parse_msh(&far, "broken.msh").unwrap_err();
+    assert_eq!(e.line, None, "{e}");
+    assert!(
+        e.message.starts_with("node 60 lies at (1, 1e200, 0) mm")
+            && e.message
+                .ends_with(&format!("(byte {} of the file)", nodes + 60)),
+        "{e}"
+    );
+    let elements = good.windows(10).position(|w| w == b"$Elements\n").unwrap() + 10;
+    // counts 32, line block 12 + 8 + 24, quadrangle block 12 + 8, quadrangle 21 40 bytes
+    let quadrangle = elements + 32 + 44 + 20 + 40;
+    let mut twice = good.clone();
+    twice[quadrangle + 24..quadrangle + 32].copy_from_slice(&30u64.to_le_bytes());
+    let e = parse_msh(&twice, "broken.msh").unwrap_err();
+    assert!(
+        e.message.starts_with("element 22 names node 30 twice")
+            && e.message
+                .ends_with(&format!("(byte {quadrangle} of the file)")),
+        "{e}"
+    );
 }
 
 fn mutated(base: Vec<u8>) -> impl Strategy<Value = Vec<u8>> {

@@ -245,7 +245,8 @@ fn soft_bending_note(s: &Scenario) -> Option<String> {
 }
 
 /// The blank's mesh: the rectangle, or the file's (restricted to `element_set` if named), with
-/// the reader's notes. Rigid elements cannot be a blank.
+/// the reader's notes. A file's must be one sheet of shell or membrane elements
+/// (`MeshImport::into_blank`).
 pub fn blank_mesh(s: &Scenario) -> Result<(Mesh, Vec<String>), String> {
     match &s.blank.shape {
         BlankShape::Rectangle {
@@ -261,28 +262,14 @@ pub fn blank_mesh(s: &Scenario) -> Result<(Mesh, Vec<String>), String> {
         BlankShape::File { mesh, element_set } => {
             let import = read_mesh_file(mesh).map_err(|e| e.to_string())?;
             let file = mesh.display();
-            let notes = import
-                .notes
-                .iter()
-                .map(|n| format!("{file}: {n}"))
-                .collect();
-            let (mesh, rigid) = match element_set {
-                Some(set) => {
-                    let (sub, kept) = import
-                        .mesh
-                        .restricted_to(set)
-                        .map_err(|e| format!("{file}: blank.element_set: {e}"))?;
-                    (sub, kept.iter().map(|&t| import.rigid[t]).collect())
-                }
-                None => (import.mesh, import.rigid),
+            let import = match element_set {
+                Some(set) => import
+                    .restricted_to(set)
+                    .map_err(|e| format!("{file}: blank.element_set: {e}"))?,
+                None => import,
             };
-            if let Some(t) = rigid.iter().position(|&r| r) {
-                return Err(format!(
-                    "{file}: element {t} of the blank is a rigid element (R3D3/R3D4); a blank is \
-                     made of shell or membrane elements (name the blank's elements with \
-                     blank.element_set, or read rigid elements as a tool)"
-                ));
-            }
+            let (mesh, notes) = import.into_blank().map_err(|e| e.to_string())?;
+            let notes = notes.iter().map(|n| format!("{file}: {n}")).collect();
             // the formed blank's deck, written at the end of the run, carries the mesh's sets:
             // a name it cannot write is refused now rather than after the whole stroke
             check_set_names(&mesh).map_err(|e| {

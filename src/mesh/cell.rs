@@ -31,6 +31,15 @@ impl Cell {
         }
     }
 
+    /// The same cell numbered the other way round (its normal reversed), from the same first
+    /// corner.
+    pub fn reversed(&self) -> Cell {
+        match *self {
+            Cell::Triangle([a, b, c]) => Cell::Triangle([a, c, b]),
+            Cell::Quad([a, b, c, d]) => Cell::Quad([a, d, c, b]),
+        }
+    }
+
     /// The positions of the corners in `x`.
     pub fn positions(&self, x: &[Vector3<f64>]) -> Vec<Vector3<f64>> {
         self.nodes().iter().map(|&n| x[n]).collect()
@@ -109,6 +118,12 @@ mod tests {
             .sum();
         assert!((q.area(&x) - 2.0).abs() < 1e-14 && (sum - 2.0).abs() < 1e-14);
         assert!(q.area_vector(&x).z > 0.0, "counter-clockwise about +z");
+        assert_eq!(q.reversed().area_vector(&x), -q.area_vector(&x));
+        assert_eq!(q.reversed(), Cell::Quad([0, 3, 2, 1]));
+        assert_eq!(
+            Cell::Triangle([0, 1, 2]).reversed(),
+            Cell::Triangle([0, 2, 1])
+        );
         assert_eq!(q.centroid(&x), Vector3::new(1.0, 0.5, 0.0));
         assert_eq!(
             q.edges().collect::<Vec<_>>(),

@@ -10,7 +10,8 @@
 //! set aside, and every failure is a [`MeshFileError`] naming the line (ASCII text) or the
 //! byte (binary data).
 
-use super::{Cell, Mesh, MeshError, MeshFileError, MeshImport, FOLDED};
+use super::conformity::check_elements;
+use super::{At, Cell, Mesh, MeshFileError, MeshImport, Origin, Place};
 use nalgebra::Vector3;
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::fmt::Write as _;
@@ -42,7 +43,8 @@ pub fn read_msh(path: &Path) -> Result<MeshImport, MeshFileError> {
 /// consistently oriented gets a note naming the first offending element.
 pub fn parse_msh(bytes: &[u8], file: &str) -> Result<MeshImport, MeshFileError> {
     let raw = RawFile::parse(bytes, file)?;
-    raw.into_import(file)
+    let lines = Lines::new(bytes, raw.text_end);
+    raw.into_import(file, &lines)
 }
 
 /// Writes `mesh` as an ASCII Gmsh MSH 4.1 file. See [`write_msh_to`].
@@ -441,6 +443,8 @@ fn element_type_name(t: i32) -> Option<&'static str> {
 struct RawNode {
     tag: u64,
     x: Vector3<f64>,
+    /// Where its coordinates start.
+    at: usize,
 }
 
 /// One triangle, quadrangle, line or point of the file, its nodes as indices into the file's
@@ -451,6 +455,8 @@ struct RawElement {
     /// Entity dimension and tag.
     entity: (i32, i32),
     nodes: [usize; 4],
+    /// Where its tag is.
+    at: usize,
 }
 
 impl RawElement {
@@ -478,6 +484,8 @@ struct RawFile {
     /// Skipped volume elements, by type.
     volumes: BTreeMap<i32, usize>,
     notes: Vec<String>,
+    /// Where binary data starts (the end of the file in ASCII).
+    text_end: usize,
 }
 
 impl RawFile {
@@ -562,6 +570,7 @@ impl RawFile {
                 }
             }
         }
+        raw.text_end = c.text_end.min(bytes.len());
         if !raw.has_nodes || !raw.has_elements {
             let missing = if raw.has_nodes { "$Elements" } else { "$Nodes" };
             return Err(MeshFileError::in_file(
@@ -824,6 +833,7 @@ fn nodes(c: &mut Cursor, index: &mut HashMap<u64, usize>) -> Result<Vec<RawNode>
             nodes.push(RawNode {
                 tag,
                 x: Vector3::new(x, y, z),
+                at,
             });
         }
     }
@@ -894,6 +904,7 @@ fn elements(
             raw.elements.reserve(room);
         }
         for _ in 0..n {
+            let at = c.mark();
             let tag = c.size("an element tag")?;
             element_nodes.clear();
             for _ in 0..per_element {
@@ -917,6 +928,7 @@ fn elements(
                     kind,
                     entity: (dimension, entity),
                     nodes,
+                    at,
                 });
             }
         }
@@ -963,7 +975,7 @@ fn dimension_word(dimension: i32) -> &'static str {
 }
 
 impl RawFile {
-    fn into_import(mut self, file: &str) -> Result<MeshImport, MeshFileError> {
+    fn into_import(mut self, file: &str, lines: &Lines) -> Result<MeshImport, MeshFileError> {
         let mut notes = std::mem::take(&mut self.notes);
         // cells from the surface elements, in file order
         let mut cells: Vec<Cell> = Vec::new();
@@ -1189,6 +1201,22 @@ impl RawFile {
         }
 
         let rigid = vec![false; cells.len()];
+        let place = |label: u64, at: usize| Place {
+            label,
+            file: 0,
+            at: lines.at(at),
+        };
+        let origin = Origin {
+            files: vec![file.to_string()],
+            nodes: file_node
+                .iter()
+                .map(|&i| place(self.nodes[i].tag, self.nodes[i].at))
+                .collect(),
+            cells: cell_element
+                .iter()
+                .map(|&e| place(self.elements[e].tag, self.elements[e].at))
+                .collect(),
+        };
         let mesh = Mesh {
             nodes,
             cells,
@@ -1196,24 +1224,37 @@ impl RawFile {
             element_sets,
             warp_directions: None,
         };
-        mesh.validate().map_err(|e| match e {
-            MeshError::Degenerate { triangle, area } => MeshFileError::in_file(
-                file,
-                format!(
-                    "element {} is degenerate (area {area:e} mm^2)",
-                    self.elements[cell_element[triangle]].tag
-                ),
-            ),
-            MeshError::Folded { element } => MeshFileError::in_file(
-                file,
-                format!(
-                    "element {} {FOLDED}",
-                    self.elements[cell_element[element]].tag
-                ),
-            ),
-            other => MeshFileError::in_file(file, other.to_string()),
-        })?;
-        Ok(MeshImport { mesh, rigid, notes })
+        check_elements(&mesh).map_err(|d| origin.defect(&d))?;
+        mesh.validate().map_err(|e| origin.mesh_error(&e))?;
+        Ok(MeshImport {
+            mesh,
+            rigid,
+            notes,
+            origin,
+        })
+    }
+}
+
+/// The line of a place in the text of a file, or its byte in binary data.
+struct Lines {
+    /// Offsets of the line ends in the text.
+    ends: Vec<usize>,
+    text_end: usize,
+}
+
+impl Lines {
+    fn new(bytes: &[u8], text_end: usize) -> Self {
+        let ends = (0..text_end).filter(|&i| bytes[i] == b'\n').collect();
+        Self { ends, text_end }
+    }
+
+    /// As [`Cursor::error`] counts: one more than the line ends before `at`.
+    fn at(&self, at: usize) -> At {
+        if at < self.text_end {
+            At::Line(1 + self.ends.partition_point(|&end| end < at))
+        } else {
+            At::Byte(at)
+        }
     }
 }
 

@@ -4,6 +4,7 @@
 
 pub mod abaqus;
 pub mod cell;
+pub mod conformity;
 pub mod file;
 pub mod gmsh;
 pub mod orientation;
@@ -11,7 +12,7 @@ pub mod rectangle;
 
 pub use cell::Cell;
 
-pub use file::{read_mesh_file, MeshFileError, MeshImport};
+pub use file::{read_mesh_file, At, MeshFileError, MeshImport, Origin, Place};
 pub use rectangle::{rectangle, DiagonalPattern};
 
 use nalgebra::Vector3;
@@ -51,7 +52,7 @@ pub enum MeshError {
         node: usize,
         nodes: usize,
     },
-    #[error("element {triangle} is degenerate (area {area:e} mm^2)")]
+    #[error("element {triangle} is degenerate (area {} mm^2)", six_digits(*area))]
     Degenerate { triangle: usize, area: f64 },
     /// A quadrilateral that is not convex ([`Cell::is_folded`]).
     #[error("element {element} {FOLDED}")]
@@ -248,6 +249,16 @@ impl Mesh {
                 name: name.to_string(),
                 available: self.set_names(),
             })
+    }
+}
+
+/// `v` to 6 significant digits, for messages: `0.3`, `1e200`, `1.23457e-7`.
+fn six_digits(v: f64) -> String {
+    let rounded: f64 = format!("{v:.5e}").parse().unwrap_or(v);
+    if rounded == 0.0 || (1e-4..1e6).contains(&rounded.abs()) {
+        format!("{rounded}")
+    } else {
+        format!("{rounded:e}")
     }
 }
 

@@ -8,7 +8,8 @@ use super::super::writer::{is_section_set, SECTION_SET_PREFIX};
 use super::super::AbaqusMesh;
 use super::lookup::{IndexSet, Resolved, Use};
 use super::{supported_types, Axes, Model, Thickness, ELEMENT_TYPES};
-use crate::mesh::{Cell, Mesh, MeshError, MeshFileError, MeshImport, FOLDED};
+use crate::mesh::conformity::check_elements;
+use crate::mesh::{At, Cell, Mesh, MeshError, MeshFileError, MeshImport, Origin, Place};
 use nalgebra::Vector3;
 use std::collections::{BTreeMap, HashMap, HashSet};
 
@@ -130,11 +131,38 @@ impl Model {
             element_sets: mesh_element_sets,
             warp_directions,
         };
-        if let Err(e) = mesh.validate() {
-            return Err(self.validation_error(deck, e, &kept));
-        }
+        let place = |label: u64, loc: Loc| Place {
+            label,
+            file: loc.file,
+            at: At::Line(loc.line),
+        };
+        let origin = Origin {
+            files: deck.files.clone(),
+            nodes: kept
+                .iter()
+                .map(|&n| place(self.nodes[n].label, self.nodes[n].loc))
+                .collect(),
+            cells: self
+                .elements
+                .iter()
+                .map(|e| place(e.label, e.loc))
+                .collect(),
+        };
+        check_elements(&mesh).map_err(|d| origin.defect(&d))?;
+        mesh.validate().map_err(|e| match e {
+            MeshError::Empty => MeshFileError::in_file(
+                origin.files.first().cloned().unwrap_or_default(),
+                format!("no elements (supported types: {})", supported_types()),
+            ),
+            other => origin.mesh_error(&other),
+        })?;
         Ok(AbaqusMesh {
-            import: MeshImport { mesh, rigid, notes },
+            import: MeshImport {
+                mesh,
+                rigid,
+                notes,
+                origin,
+            },
             thickness,
         })
     }
@@ -321,44 +349,6 @@ impl Model {
             notes.push(ignored_note(deck, &self.ignored));
         }
         notes
-    }
-
-    /// What [`Mesh::validate`] found, at the element or node concerned.
-    fn validation_error(&self, deck: &Deck, error: MeshError, kept: &[usize]) -> MeshFileError {
-        let file = deck.files.first().cloned().unwrap_or_default();
-        let element = |e: usize| &self.elements[e];
-        match error {
-            MeshError::Empty => MeshFileError::in_file(
-                file,
-                format!("no elements (supported types: {})", supported_types()),
-            ),
-            MeshError::Degenerate { triangle, area } => deck.error(
-                element(triangle).loc,
-                format!(
-                    "element {} is degenerate (area {area:e} mm^2)",
-                    element(triangle).label
-                ),
-            ),
-            MeshError::Folded { element: e } => deck.error(
-                element(e).loc,
-                format!("element {} {}", element(e).label, FOLDED),
-            ),
-            MeshError::NonFinite { node } => match kept.get(node).map(|&n| &self.nodes[n]) {
-                Some(n) => deck.error(
-                    n.loc,
-                    format!("node {} has a non-finite coordinate", n.label),
-                ),
-                None => MeshFileError::in_file(file, error.to_string()),
-            },
-            MeshError::BadWarpDirection { triangle } => deck.error(
-                element(triangle).loc,
-                format!(
-                    "element {}: zero or non-finite warp direction",
-                    element(triangle).label
-                ),
-            ),
-            other => MeshFileError::in_file(file, other.to_string()),
-        }
     }
 }
 
