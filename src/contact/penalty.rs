@@ -14,7 +14,7 @@
 //! tool), then scaled back to `mu |f_n|` if it exceeds it (slip). In sliding the friction force
 //! is therefore exactly `mu |f_n|` against the slip direction; in sticking, below it.
 
-use super::rigid_tool::{NearTriangles, RigidTool};
+use super::rigid_tool::{NearTriangles, RigidTool, ToolMotion};
 use nalgebra::Vector3;
 use rayon::prelude::*;
 
@@ -58,6 +58,40 @@ pub struct Nodes<'a> {
     pub positions: &'a [Vector3<f64>],
     pub velocities: &'a [Vector3<f64>],
     pub masses: &'a [f64],
+}
+
+/// Nodes at `positions` behind a moving tool's surface (the tools at `translations`) deeper
+/// than the contact's reach (`max_penetration`): the penalty no longer holds them, so they went
+/// through the tool. Only the nodes inside the tool's bounding box, grown by three such depths
+/// (a flat holder's box is flat), are searched, a full search each; fixed tools do not move
+/// into the blank.
+pub fn nodes_through_tools(
+    tools: &[RigidTool],
+    translations: &[Vector3<f64>],
+    positions: &[Vector3<f64>],
+    contact: &ContactSettings,
+) -> usize {
+    let depth = contact.max_penetration;
+    let moving = tools
+        .iter()
+        .zip(translations)
+        .filter(|(tool, _)| !matches!(tool.motion, ToolMotion::Fixed))
+        .map(|(tool, shift)| {
+            let (lo, hi) = tool.surface.bounds();
+            let margin = Vector3::repeat(3.0 * depth);
+            (tool, shift, lo - margin, hi + margin)
+        })
+        .collect::<Vec<_>>();
+    positions
+        .par_iter()
+        .filter(|x| {
+            moving.iter().any(|(tool, shift, lo, hi)| {
+                let local = *x - *shift;
+                let inside = (0..3).all(|d| local[d] >= lo[d] && local[d] <= hi[d]);
+                inside && tool.gap(&local, contact.offset) < -depth
+            })
+        })
+        .count()
 }
 
 /// One node's kinematics.

@@ -372,3 +372,41 @@ pub fn max_shear_angle(model: &Model, state: &State) -> f64 {
         .map(f64::abs)
         .fold(0.0, f64::max)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::forming::Scenario;
+
+    fn example(overrides: &[&str]) -> FormingModel {
+        let path =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/hemisphere.toml");
+        let overrides: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
+        FormingModel::new(&Scenario::load(&path, &overrides).unwrap()).unwrap()
+    }
+
+    /// A stopped run's advice names only keys its solver takes: the implicit solver refuses
+    /// `process.time_scaling` and `process.target_time_step`, so its advice cannot name them.
+    #[test]
+    fn the_advice_of_a_stopped_run_names_keys_its_solver_takes() {
+        let implicit = check_settings(&example(&["process.stroke=5"])).unwrap();
+        let advice = implicit.dynamic_advice;
+        assert!(advice.contains("process.max_increment"), "{advice}");
+        assert!(
+            !advice.contains("time_scaling") && !advice.contains("target_time_step"),
+            "{advice}"
+        );
+        let explicit = check_settings(&example(&[
+            "process.stroke=5",
+            "process.solver=explicit",
+            "process.time_scaling=10",
+        ]))
+        .unwrap();
+        assert!(
+            explicit.dynamic_advice.contains("process.time_scaling"),
+            "{}",
+            explicit.dynamic_advice
+        );
+        assert!(!explicit.dynamic_advice.contains("max_increment"));
+    }
+}

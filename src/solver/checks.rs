@@ -9,6 +9,7 @@
 use super::energy::Energies;
 use super::explicit::{self, Observer, SolverError, SolverSettings, State};
 use super::model::Model;
+use crate::contact::penalty::nodes_through_tools;
 use crate::contact::ToolMotion;
 use nalgebra::Vector3;
 
@@ -337,7 +338,12 @@ impl Watch {
                 self.settings.dynamic_advice,
             ));
         }
-        let tunnelled = tunnelled_nodes(model, state);
+        let tunnelled = nodes_through_tools(
+            &model.tools,
+            &state.tool_translations,
+            &state.positions,
+            &model.contact,
+        );
         self.most_tunnelled = self.most_tunnelled.max(tunnelled);
         if tunnelled as f64 > TUNNELLED_STOP_FRACTION * self.nodes as f64 {
             return Err(stop(
@@ -480,37 +486,6 @@ fn largest_force(state: &State) -> f64 {
         .fold(0.0, f64::max);
     let reactions: f64 = state.reactions.iter().map(finite).sum();
     tools.max(reactions)
-}
-
-/// Nodes behind a moving tool's surface deeper than the contact's reach (`max_penetration`):
-/// the penalty no longer holds them, so they went through the tool. Only the nodes inside the
-/// tool's bounding box, grown by three such depths (a flat holder's box is flat), are searched
-/// (a full search each, at checkpoints only); fixed tools do not move into the blank.
-fn tunnelled_nodes(model: &Model, state: &State) -> usize {
-    let contact = &model.contact;
-    let depth = contact.max_penetration;
-    let moving = model
-        .tools
-        .iter()
-        .zip(&state.tool_translations)
-        .filter(|(tool, _)| !matches!(tool.motion, ToolMotion::Fixed))
-        .map(|(tool, shift)| {
-            let (lo, hi) = tool.surface.bounds();
-            let margin = Vector3::repeat(3.0 * depth);
-            (tool, shift, lo - margin, hi + margin)
-        })
-        .collect::<Vec<_>>();
-    state
-        .positions
-        .iter()
-        .filter(|x| {
-            moving.iter().any(|(tool, shift, lo, hi)| {
-                let local = *x - *shift;
-                let inside = (0..3).all(|d| local[d] >= lo[d] && local[d] <= hi[d]);
-                inside && tool.gap(&local, contact.offset) < -depth
-            })
-        })
-        .count()
 }
 
 #[cfg(test)]

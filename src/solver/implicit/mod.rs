@@ -25,6 +25,7 @@ mod supernodal;
 use super::energy::Energies;
 use super::explicit::{elastic_energy, positive_setting, Observer, SolverError, State};
 use super::model::{Model, Motion};
+use crate::contact::penalty::nodes_through_tools;
 use crate::contact::potential::{penalty_stiffness, FrictionLag};
 use crate::contact::{RigidTool, ToolMotion};
 use assembly::{Evaluation, Evaluator, IncrementStart, Layout, NearLists, Tangent, Trial};
@@ -661,7 +662,19 @@ fn increment(
     stats: &mut ImplicitStatistics,
 ) -> Result<Solved, NotConverged> {
     let guess = predictor(evaluator.model, from.0, dt);
-    newton(evaluator, work, from, dt, guess, settings, stats)
+    let solved = newton(evaluator, work, from, dt, guess, settings, stats)?;
+    // the contact's own test sees the tools' triangles near each node only: a tool that moved
+    // past a node in one increment is found by a full search
+    let model = evaluator.model;
+    let through = nodes_through_tools(&model.tools, &solved.2, &solved.1, &model.contact);
+    if through > 0 {
+        return Err(NotConverged {
+            worst_nodes: Vec::new(),
+            residuals: Vec::new(),
+            reason: format!("{through} nodes passed through a tool in the increment"),
+        });
+    }
+    Ok(solved)
 }
 
 /// Friction lagged again with the normal forces of the iterate `evaluation`, when they differ
