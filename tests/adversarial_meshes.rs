@@ -8,7 +8,7 @@
 
 mod common;
 
-use common::adversarial::{check, Case, Fixtures};
+use common::adversarial::{assert_all_pass, check, Case, Fixtures};
 use common::repo_path;
 use std::collections::HashMap;
 use std::path::Path;
@@ -373,14 +373,7 @@ fn blanks_that_are_not_one_sheet_are_refused_at_their_line() {
             });
         }
     }
-    let failures: Vec<String> = cases.iter().filter_map(|c| check(c).err()).collect();
-    assert!(
-        failures.is_empty(),
-        "{} of {} cases failed:\n{}",
-        failures.len(),
-        cases.len(),
-        failures.join("\n")
-    );
+    assert_all_pass(&cases, 1);
 }
 
 /// A defect inside `blank.element_set` is named by the file's labels and lines, though the

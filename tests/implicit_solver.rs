@@ -421,7 +421,7 @@ impl Observer for Last {
 /// onto a floor 0.04 mm below it (frictionless, no bending). The sheet moves as a rigid body, so
 /// the incremental potential is piecewise quadratic: drag, plate and floor springs. Newton's
 /// correction with the floor's springs anticipated is then the exact solution, and the plate's
-/// closing before the clock starts (docs/solver.md, "Force-driven tools") converges in two
+/// closing before the clock starts (docs/solver.md, "Blank holder") converges in two
 /// iterations (the step and the check that it is solved); without them the correction carries
 /// the sheet through the floor (measured: four iterations, one on the projected tangent). The
 /// one increment of the whole second then starts solved (one iteration), and the floor ends

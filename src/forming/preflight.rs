@@ -187,17 +187,19 @@ pub fn estimate_from_keys(
         // added mass are the least the run will have, so refusing them now refuses nothing the
         // built model would run; too few steps waits for the built model's step
         let step_keys = format!("{blank_keys} or process.target_time_step (the step)");
-        estimate::check_excess(
-            &estimate,
-            (
-                &step_keys,
-                "process.punch_speed or process.time_scaling",
-                "process.target_time_step",
-            ),
-        )
-        .map_err(on)?;
+        estimate::check_excess(&estimate, step_count_keys(&step_keys)).map_err(on)?;
     }
     Ok(estimate)
+}
+
+/// What sets an explicit run's step count, for the refusals' messages: `step_keys` (what sets
+/// the step), what sets the stroke's duration, what sets the mass scaling.
+fn step_count_keys(step_keys: &str) -> (&str, &str, &str) {
+    (
+        step_keys,
+        "process.punch_speed or process.time_scaling",
+        "process.target_time_step",
+    )
 }
 
 /// The explicit solver's safety factor on its stable step (`SolverSettings::time_step_safety`
@@ -255,15 +257,7 @@ pub fn check_model(
     )
     .map_err(on)?;
     let step_keys = format!("{blank_keys} or process.target_time_step (the step)");
-    estimate::check_steps(
-        &estimate,
-        (
-            &step_keys,
-            "process.punch_speed or process.time_scaling",
-            "process.target_time_step",
-        ),
-    )
-    .map_err(on)?;
+    estimate::check_steps(&estimate, step_count_keys(&step_keys)).map_err(on)?;
     Ok(estimate)
 }
 

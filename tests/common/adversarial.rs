@@ -165,3 +165,17 @@ pub fn has_long_number(text: &str) -> bool {
     }
     false
 }
+
+/// Every one of `cases` (at least `at_least` of them) gives its exit code and names what it
+/// must; the failures listed together.
+pub fn assert_all_pass(cases: &[Case], at_least: usize) {
+    assert!(cases.len() >= at_least, "only {} cases", cases.len());
+    let failures: Vec<String> = cases.iter().filter_map(|c| check(c).err()).collect();
+    assert!(
+        failures.is_empty(),
+        "{} of {} cases failed:\n{}",
+        failures.len(),
+        cases.len(),
+        failures.join("\n")
+    );
+}
