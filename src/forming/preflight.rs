@@ -5,7 +5,6 @@
 //! pressing the blank harder than any composite is formed.
 
 use super::scenario::{BlankShape, Scenario, ToolSet};
-use super::setup::DEFAULT_INCREMENTS;
 use crate::experiment::sheet_test::Crosshead;
 use crate::limits::{shown, HOLDER_PRESSURE};
 use crate::material::{MaterialCard, MembraneKinematics};
@@ -164,7 +163,9 @@ pub fn estimate_from_keys(
             }
         }
         SolverKind::Implicit => {
-            let travel = p.max_increment.unwrap_or(p.stroke / DEFAULT_INCREMENTS);
+            let travel = p
+                .max_increment
+                .unwrap_or(p.stroke / implicit::DEFAULT_INCREMENTS);
             let increments = (p.stroke / travel).ceil();
             RunEstimate {
                 size,

@@ -21,7 +21,7 @@ use crate::mesh::abaqus::check_set_names;
 use crate::mesh::orientation::{describe_poor_projections, poor_projections, reference_warp};
 use crate::mesh::{read_mesh_file, rectangle, DiagonalPattern, Mesh};
 use crate::solver::estimate::RunEstimate;
-use crate::solver::SolverKind;
+use crate::solver::{implicit, SolverKind};
 use crate::solver::{Constraint, Model, Motion, SolverSettings};
 use nalgebra::Vector3;
 use std::collections::BTreeMap;
@@ -38,11 +38,6 @@ const HOLDER_MASS_RATIO: f64 = 10.0;
 /// A blank node may start this far (in ply thicknesses) inside a tool read from a file before
 /// the placement is refused: the contact would fling it out at the first step.
 const START_PENETRATION_LIMIT: f64 = 0.1;
-
-/// Increments of the stroke at their largest, where `process.max_increment` is not given
-/// **(choice)**: 0.5 mm on the examples' 30 mm, where the hemisphere's 400 to 20,164 cells
-/// converge in 5 to 10 Newton iterations an increment (docs/performance.md).
-pub const DEFAULT_INCREMENTS: f64 = 60.0;
 
 /// A scenario made ready to run.
 pub struct FormingModel {
@@ -170,7 +165,10 @@ impl FormingModel {
             damping: 0.0,
             yarn_damping: 0.06,
         };
-        let max_increment = p.max_increment.unwrap_or(p.stroke / DEFAULT_INCREMENTS) / punch.speed;
+        let max_increment = p
+            .max_increment
+            .unwrap_or(p.stroke / implicit::DEFAULT_INCREMENTS)
+            / punch.speed;
         let estimate = match p.solver {
             SolverKind::Explicit => preflight::check_model(s, &model, &settings, punch.speed)?,
             SolverKind::Implicit => {

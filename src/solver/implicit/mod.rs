@@ -320,7 +320,9 @@ pub fn run(
 }
 
 /// Increments over the run at their largest where [`ImplicitSettings::max_increment`] is not
-/// set: the virtual tests' default (forming runs set theirs from `process.max_increment`).
+/// set, and of the stroke where `process.max_increment` is not **(choice)**: 0.5 mm on the
+/// examples' 30 mm, where the hemisphere's 400 to 20,164 cells converge in 5 to 10 Newton
+/// iterations an increment (docs/performance.md).
 pub const DEFAULT_INCREMENTS: f64 = 60.0;
 
 /// The first multiple of `interval` after `time`, by more than rounding: the next record
