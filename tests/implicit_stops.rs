@@ -51,7 +51,10 @@ fn crushing_scenario(dir: &Path, stroke: f64) -> PathBuf {
         .collect();
     write_stl(&dir.join("punch.stl"), &pyramid);
     let p = square(DIE_FACE);
-    write_stl(&dir.join("die.stl"), &[[p[0], p[2], p[1]], [p[0], p[3], p[2]]]);
+    write_stl(
+        &dir.join("die.stl"),
+        &[[p[0], p[2], p[1]], [p[0], p[3], p[2]]],
+    );
     let card = repo_path("materials/t300-5hs-pps.toml");
     let text = format!(
         "[blank]\ncard = {card:?}\nwidth = 80.0\nlength = 80.0\nelement_size = 8.0\n\n\
@@ -137,7 +140,10 @@ fn a_blank_crushed_against_a_closed_die_keeps_its_last_converged_state() {
         reached > CLOSING - 1.0 && reached < CLOSING + 1.0,
         "stopped at {reached} mm, the tip meets the die at {CLOSING} mm less the ply"
     );
-    assert!(stdout.contains("status                      stopped: increment"), "{stdout}");
+    assert!(
+        stdout.contains("status                      stopped: increment"),
+        "{stdout}"
+    );
 }
 
 /// Without `process.solver` a scenario runs implicitly (no time or mass scaling asked): the
@@ -157,8 +163,14 @@ fn a_scenario_without_a_solver_runs_implicitly() {
     let stderr = String::from_utf8_lossy(&run.stderr);
     let stdout = String::from_utf8_lossy(&run.stdout);
     assert_eq!(run.status.code(), Some(0), "{stdout}\n{stderr}");
-    assert!(stderr.contains("estimate: implicit quasi-static run"), "{stderr}");
-    assert!(stdout.contains("solver                      implicit:"), "{stdout}");
+    assert!(
+        stderr.contains("estimate: implicit quasi-static run"),
+        "{stderr}"
+    );
+    assert!(
+        stdout.contains("solver                      implicit:"),
+        "{stdout}"
+    );
     for key in ["process.time_scaling=10", "process.target_time_step=1e-5"] {
         let name = key.split('=').next().unwrap();
         assert_bad_input(
@@ -175,7 +187,11 @@ fn a_scenario_without_a_solver_runs_implicitly() {
 fn an_explicit_run_estimated_over_ten_minutes_names_the_implicit_solver() {
     let load = |overrides: &[&str]| {
         let overrides: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
-        Scenario::load(&repo_path("tests/data/hemisphere-explicit.toml"), &overrides).unwrap()
+        Scenario::load(
+            &repo_path("tests/data/hemisphere-explicit.toml"),
+            &overrides,
+        )
+        .unwrap()
     };
     let advice = |s: &Scenario| {
         let card = MaterialCard::load(&repo_path("materials/t300-5hs-pps.toml")).unwrap();
@@ -196,5 +212,8 @@ fn an_explicit_run_estimated_over_ten_minutes_names_the_implicit_solver() {
     }
     let mut implicit = load(&["blank.element_size=2"]);
     implicit.process.solver = SolverKind::Implicit;
-    assert!(advice(&implicit).1.is_none(), "an implicit run gets no advice");
+    assert!(
+        advice(&implicit).1.is_none(),
+        "an implicit run gets no advice"
+    );
 }
