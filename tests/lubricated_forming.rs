@@ -106,3 +106,31 @@ fn a_lubricated_blank_forms_symmetric_in_the_work_of_one_with_friction() {
         "the pin holds {reaction} N against {wet_force} N of punch force"
     );
 }
+
+/// The pin is placed only where nothing else holds the blank: on the full blank without
+/// friction, at its node on the punch's axis; not with friction, and not on the quarter model,
+/// whose symmetry planes hold that node already.
+#[test]
+fn the_pin_locates_only_a_blank_that_nothing_else_holds() {
+    let pins = |file: &str, friction: f64| {
+        let overrides: Vec<String> = ["punch", "die", "holder"]
+            .iter()
+            .map(|tool| format!("process.friction.{tool}={friction}"))
+            .collect();
+        let scenario =
+            thermostamp::forming::Scenario::load(&common::repo_path(file), &overrides).unwrap();
+        let forming = FormingModel::new(&scenario).unwrap();
+        forming
+            .model
+            .constraints
+            .iter()
+            .filter(|c| c.name == "locating pin")
+            .map(|c| (c.nodes.clone(), forming.model.mesh.nodes[c.nodes[0]]))
+            .collect::<Vec<_>>()
+    };
+    let located = pins("examples/hemisphere.toml", 0.0);
+    assert_eq!(located.len(), 1, "{located:?}");
+    assert!(located[0].1.xy().norm() < 1e-9, "on the axis: {located:?}");
+    assert!(pins("examples/hemisphere.toml", 0.2).is_empty());
+    assert!(pins("examples/hemisphere-quarter.toml", 0.0).is_empty());
+}
