@@ -6,8 +6,8 @@
 //! by the pin on the punch's axis, it forms like the run with friction, symmetric, with less
 //! punch force and more draw-in.
 //!
-//! Long (release, 2 threads: 35 to 40 s unloaded, 65 s on a loaded machine): two runs of the
-//! hemisphere on 1,600 cells.
+//! Long (release, 2 threads: 39 s, 28 s of CPU, on a machine shared with other builds): two
+//! runs of the hemisphere on 1,600 cells.
 
 mod common;
 
