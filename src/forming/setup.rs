@@ -371,9 +371,9 @@ fn boundary_constraints(s: &Scenario, mesh: &Mesh) -> Result<Vec<Constraint>, St
 /// (x and y), unless a `[[boundary]]` already holds it. Without friction nothing holds the blank
 /// across the stroke on tools that are round about that axis (hemisphere) or straight along it
 /// (double dome's ridge) but the solver's drag, and its centred shape is not stable there: the
-/// hemisphere's blank slid 8 mm off the axis over the stroke and the implicit solver cut its
-/// increments until inertia held it. A press locates such a blank; with any friction the stick
-/// does.
+/// hemisphere's blank slid 7.8 mm off the axis on 8 mm cells, off the punch on 4 mm, and the
+/// implicit solver cut its increments until inertia held it. A press locates such a blank; with
+/// any friction the stick does.
 fn locating_pin(s: &Scenario, mesh: &Mesh, constraints: &[Constraint]) -> Option<Constraint> {
     let f = &s.process.friction;
     let frictionless = f.punch == 0.0 && f.die == 0.0 && f.holder == 0.0;
