@@ -20,6 +20,7 @@
 pub mod assembly;
 pub mod contact_entry;
 pub mod linear;
+pub mod multilevel;
 mod supernodal;
 
 use super::energy::Energies;
@@ -29,7 +30,8 @@ use crate::contact::penalty::nodes_through_tools;
 use crate::contact::potential::{penalty_stiffness, FrictionLag};
 use crate::contact::{RigidTool, ToolMotion};
 use assembly::{Evaluation, Evaluator, IncrementStart, Layout, NearLists, Tangent, Trial};
-use linear::{Cholesky, Sparsified};
+use linear::{conjugate_gradients, Cholesky, NotSolved, Sparsified};
+use multilevel::Coarse;
 use nalgebra::{Matrix2, Vector3};
 use std::time::Instant;
 
@@ -130,6 +132,8 @@ struct Preconditioner {
     sparsified: Sparsified,
     cholesky: Cholesky,
     values: Vec<f64>,
+    /// The coarse level of rigid aggregates, where the run takes one.
+    coarse: Option<Coarse>,
 }
 
 impl Preconditioner {
@@ -148,40 +152,111 @@ impl Preconditioner {
         let Some(sparsified) = layout.membrane_preconditioner(model) else {
             return Ok(None);
         };
+        let coarse = if std::env::var("THERMO_COARSE").is_ok() {
+            let cells: Vec<Vec<usize>> =
+                model.elements.iter().map(|e| e.nodes().to_vec()).collect();
+            Some(Coarse::new(
+                &model.mesh.nodes,
+                &cells,
+                &layout.pattern,
+                &layout.held,
+            )?)
+        } else {
+            None
+        };
         Ok(Some(Self {
             cholesky: Cholesky::analyse(&sparsified.pattern)?,
             sparsified,
             values: Vec::new(),
+            coarse,
         }))
     }
 }
 
+/// Why a linear solve was not made by conjugate gradients.
+enum NotIterated {
+    /// There is no preconditioner, or the iterations did not converge within
+    /// [`CG_ITERATIONS`]: the tangent is to be factorised.
+    Factorise,
+    /// The tangent is not positive definite: the preconditioner on the membrane's stencil,
+    /// which lies above it, is not, or a search direction has no positive curvature. Its
+    /// factorisation would fail too.
+    Indefinite,
+}
+
 /// Solves `K d = rhs` for the tangent `K` in `values` (on `layout`'s pattern) by conjugate
-/// gradients preconditioned with its factorisation on the membrane's stencil (docs/solver.md,
-/// "Conjugate gradients on the membrane's stencil"); `None` where there is no
-/// `preconditioner`, it is not positive definite, or the iterations do not converge within
-/// [`CG_ITERATIONS`]: then the tangent is factorised.
+/// gradients preconditioned with its factorisation on the membrane's stencil, with the
+/// coarse level of rigid aggregates where the run has one (docs/solver.md, "Conjugate
+/// gradients on the membrane's stencil").
 fn iterative_solve(
     layout: &Layout,
     preconditioner: Option<&mut Preconditioner>,
     values: &[f64],
     rhs: &[f64],
     stats: &mut ImplicitStatistics,
-) -> Option<Vec<f64>> {
-    let p = preconditioner?;
+) -> Result<Vec<f64>, NotIterated> {
+    let p = preconditioner.ok_or(NotIterated::Factorise)?;
     p.sparsified.values(values, &mut p.values);
     stats.preconditioner_factorisations += 1;
     p.cholesky
         .factorise(&p.sparsified.pattern, &p.values)
-        .ok()?;
-    let solved =
-        p.cholesky
-            .conjugate_gradients(&layout.pattern, values, rhs, CG_TOLERANCE, CG_ITERATIONS);
+        .map_err(|_| NotIterated::Indefinite)?;
+    if let Some(c) = p.coarse.as_mut() {
+        c.factorise(values).map_err(|_| NotIterated::Factorise)?;
+    }
+    let variant = std::env::var("THERMO_COARSE").unwrap_or_default();
+    let (fine, coarse) = (&mut p.cholesky, p.coarse.as_mut());
+    let pattern = &layout.pattern;
+    let solved = match coarse {
+        Some(coarse) => conjugate_gradients(
+            pattern,
+            values,
+            rhs,
+            (CG_TOLERANCE, CG_ITERATIONS),
+            |z| {
+                let r = z.to_vec();
+                let minus = |a: &[f64], b: &[f64]| -> Vec<f64> {
+                    a.iter().zip(b).map(|(a, b)| a - b).collect()
+                };
+                match variant.as_str() {
+                    "mult" => {
+                        fine.solve(z);
+                        let e = minus(&r, &pattern.multiply(values, z));
+                        coarse.correct(&e, z);
+                        let mut e = minus(&r, &pattern.multiply(values, z));
+                        fine.solve(&mut e);
+                        z.iter_mut().zip(&e).for_each(|(z, e)| *z += e);
+                    }
+                    "bnn" => {
+                        let mut q = vec![0.0; r.len()];
+                        coarse.correct(&r, &mut q);
+                        let mut w = minus(&r, &pattern.multiply(values, &q));
+                        fine.solve(&mut w);
+                        let kw = pattern.multiply(values, &w);
+                        let mut qkw = vec![0.0; r.len()];
+                        coarse.correct(&kw, &mut qkw);
+                        for (k, zk) in z.iter_mut().enumerate() {
+                            *zk = q[k] + w[k] - qkw[k];
+                        }
+                    }
+                    _ => {
+                        fine.solve(z);
+                        coarse.correct(&r, z);
+                    }
+                }
+            },
+        ),
+        None => fine.conjugate_gradients(pattern, values, rhs, CG_TOLERANCE, CG_ITERATIONS),
+    };
     let iterations = match &solved {
         Ok((_, iterations)) | Err((_, iterations)) => *iterations,
     };
     stats.cg_iterations += iterations;
-    solved.ok().map(|(d, _)| d)
+    match solved {
+        Ok((d, _)) => Ok(d),
+        Err((NotSolved::NotPositiveDefinite, _)) => Err(NotIterated::Indefinite),
+        Err((NotSolved::Slow, _)) => Err(NotIterated::Factorise),
+    }
 }
 
 /// Why an increment failed.
@@ -879,23 +954,28 @@ fn newton(
                 .map_err(|(k, e)| fail(residuals.clone(), None, format!("element {k}: {e}")))?;
             stats.assembly_seconds += clock.elapsed().as_secs_f64();
             let clock = Instant::now();
-            iterated = iterative_solve(
+            match iterative_solve(
                 layout,
                 work.preconditioner.as_mut(),
                 &work.values,
                 &descent(),
                 stats,
-            );
-            if iterated.is_some() {
-                stats.solve_seconds += clock.elapsed().as_secs_f64();
-                factored = true;
-                break;
+            ) {
+                Ok(solved) => {
+                    iterated = Some(solved);
+                    stats.solve_seconds += clock.elapsed().as_secs_f64();
+                    factored = true;
+                    break;
+                }
+                Err(NotIterated::Indefinite) => factored = false,
+                Err(NotIterated::Factorise) => {
+                    factored = work
+                        .cholesky
+                        .factorise(&layout.pattern, &work.values)
+                        .is_ok();
+                    stats.factorisations += 1;
+                }
             }
-            factored = work
-                .cholesky
-                .factorise(&layout.pattern, &work.values)
-                .is_ok();
-            stats.factorisations += 1;
             stats.solve_seconds += clock.elapsed().as_secs_f64();
             if factored || projected {
                 break;
@@ -953,8 +1033,9 @@ fn newton(
                 &pushed,
                 stats,
             ) {
-                Some(solved) => solved,
-                None => {
+                Ok(solved) => solved,
+                Err(NotIterated::Indefinite) => break,
+                Err(NotIterated::Factorise) => {
                     stats.factorisations += 1;
                     if work
                         .cholesky
