@@ -120,7 +120,11 @@ impl Pattern {
     /// number of threads.
     pub fn multiply(&self, values: &[f64], x: &[f64]) -> Vec<f64> {
         let n = x.len();
-        let split = self.symbolic.col_ptr().partition_point(|&p| p < self.halfway()).min(n);
+        let split = self
+            .symbolic
+            .col_ptr()
+            .partition_point(|&p| p < self.halfway())
+            .min(n);
         let (mut low, high) = rayon::join(
             || self.multiply_columns(values, x, 0..split),
             || self.multiply_columns(values, x, split..n),
@@ -820,6 +824,36 @@ mod tests {
             values[pattern.place(a, a).unwrap()] = *d;
         }
         (pattern, values)
+    }
+
+    /// The product with the symmetric matrix, its stored halves on two threads, is the dense
+    /// product's to rounding, and the same bits on one thread and on two.
+    #[test]
+    fn the_product_with_the_matrix_is_the_dense_one_on_any_number_of_threads() {
+        let (pattern, values) = grid(20, 5);
+        let n = pattern.size();
+        let x: Vec<f64> = (0..n).map(|k| ((k * 13) % 7) as f64 - 3.0).collect();
+        let mut dense = vec![0.0; n];
+        for ((i, j), v) in pattern.stored_pairs().into_iter().zip(&values) {
+            dense[i] += v * x[j];
+            if i != j {
+                dense[j] += v * x[i];
+            }
+        }
+        let on = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| pattern.multiply(&values, &x))
+        };
+        let (one, two) = (on(1), on(2));
+        assert_eq!(one, two);
+        let scale = dense.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        assert!(one
+            .iter()
+            .zip(&dense)
+            .all(|(a, b)| (a - b).abs() <= 1e-12 * scale));
     }
 
     /// The tree-parallel factor equals faer's, is the same to the bit on one thread and on

@@ -20,7 +20,6 @@
 pub mod assembly;
 pub mod contact_entry;
 pub mod linear;
-pub mod multilevel;
 mod supernodal;
 
 use super::energy::Energies;
@@ -30,8 +29,7 @@ use crate::contact::penalty::nodes_through_tools;
 use crate::contact::potential::{penalty_stiffness, FrictionLag};
 use crate::contact::{RigidTool, ToolMotion};
 use assembly::{Evaluation, Evaluator, IncrementStart, Layout, NearLists, Tangent, Trial};
-use linear::{conjugate_gradients, Cholesky, NotSolved, Sparsified};
-use multilevel::Coarse;
+use linear::{Cholesky, NotSolved, Sparsified};
 use nalgebra::{Matrix2, Vector3};
 use std::time::Instant;
 
@@ -132,8 +130,6 @@ struct Preconditioner {
     sparsified: Sparsified,
     cholesky: Cholesky,
     values: Vec<f64>,
-    /// The coarse level of rigid aggregates, where the run takes one.
-    coarse: Option<Coarse>,
 }
 
 impl Preconditioner {
@@ -152,23 +148,10 @@ impl Preconditioner {
         let Some(sparsified) = layout.membrane_preconditioner(model) else {
             return Ok(None);
         };
-        let coarse = if std::env::var("THERMO_COARSE").is_ok() {
-            let cells: Vec<Vec<usize>> =
-                model.elements.iter().map(|e| e.nodes().to_vec()).collect();
-            Some(Coarse::new(
-                &model.mesh.nodes,
-                &cells,
-                &layout.pattern,
-                &layout.held,
-            )?)
-        } else {
-            None
-        };
         Ok(Some(Self {
             cholesky: Cholesky::analyse(&sparsified.pattern)?,
             sparsified,
             values: Vec::new(),
-            coarse,
         }))
     }
 }
@@ -185,9 +168,8 @@ enum NotIterated {
 }
 
 /// Solves `K d = rhs` for the tangent `K` in `values` (on `layout`'s pattern) by conjugate
-/// gradients preconditioned with its factorisation on the membrane's stencil, with the
-/// coarse level of rigid aggregates where the run has one (docs/solver.md, "Conjugate
-/// gradients on the membrane's stencil").
+/// gradients preconditioned with its factorisation on the membrane's stencil (docs/solver.md,
+/// "Conjugate gradients on the membrane's stencil"), or says why not.
 fn iterative_solve(
     layout: &Layout,
     preconditioner: Option<&mut Preconditioner>,
@@ -201,53 +183,9 @@ fn iterative_solve(
     p.cholesky
         .factorise(&p.sparsified.pattern, &p.values)
         .map_err(|_| NotIterated::Indefinite)?;
-    if let Some(c) = p.coarse.as_mut() {
-        c.factorise(values).map_err(|_| NotIterated::Factorise)?;
-    }
-    let variant = std::env::var("THERMO_COARSE").unwrap_or_default();
-    let (fine, coarse) = (&mut p.cholesky, p.coarse.as_mut());
-    let pattern = &layout.pattern;
-    let solved = match coarse {
-        Some(coarse) => conjugate_gradients(
-            pattern,
-            values,
-            rhs,
-            (CG_TOLERANCE, CG_ITERATIONS),
-            |z| {
-                let r = z.to_vec();
-                let minus = |a: &[f64], b: &[f64]| -> Vec<f64> {
-                    a.iter().zip(b).map(|(a, b)| a - b).collect()
-                };
-                match variant.as_str() {
-                    "mult" => {
-                        fine.solve(z);
-                        let e = minus(&r, &pattern.multiply(values, z));
-                        coarse.correct(&e, z);
-                        let mut e = minus(&r, &pattern.multiply(values, z));
-                        fine.solve(&mut e);
-                        z.iter_mut().zip(&e).for_each(|(z, e)| *z += e);
-                    }
-                    "bnn" => {
-                        let mut q = vec![0.0; r.len()];
-                        coarse.correct(&r, &mut q);
-                        let mut w = minus(&r, &pattern.multiply(values, &q));
-                        fine.solve(&mut w);
-                        let kw = pattern.multiply(values, &w);
-                        let mut qkw = vec![0.0; r.len()];
-                        coarse.correct(&kw, &mut qkw);
-                        for (k, zk) in z.iter_mut().enumerate() {
-                            *zk = q[k] + w[k] - qkw[k];
-                        }
-                    }
-                    _ => {
-                        fine.solve(z);
-                        coarse.correct(&r, z);
-                    }
-                }
-            },
-        ),
-        None => fine.conjugate_gradients(pattern, values, rhs, CG_TOLERANCE, CG_ITERATIONS),
-    };
+    let solved =
+        p.cholesky
+            .conjugate_gradients(&layout.pattern, values, rhs, CG_TOLERANCE, CG_ITERATIONS);
     let iterations = match &solved {
         Ok((_, iterations)) | Err((_, iterations)) => *iterations,
     };
@@ -967,7 +905,8 @@ fn newton(
                     factored = true;
                     break;
                 }
-                Err(NotIterated::Indefinite) => factored = false,
+                // factorising it would fail too: on to the projected tangent
+                Err(NotIterated::Indefinite) => {}
                 Err(NotIterated::Factorise) => {
                     factored = work
                         .cholesky
