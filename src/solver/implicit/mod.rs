@@ -30,7 +30,7 @@ use crate::contact::penalty::nodes_through_tools;
 use crate::contact::potential::{penalty_stiffness, FrictionLag};
 use crate::contact::{RigidTool, ToolMotion};
 use assembly::{Evaluation, Evaluator, IncrementStart, Layout, NearLists, Tangent, Trial};
-use linear::{Cholesky, Sparsified};
+use linear::{Cholesky, NotSolved, Sparsified};
 use nalgebra::{Matrix2, Vector3};
 use newton::{newton, Problem};
 
@@ -157,24 +157,33 @@ impl Preconditioner {
     }
 }
 
+/// Why a linear solve was not made by conjugate gradients.
+enum NotIterated {
+    /// There is no preconditioner, or the iterations did not converge within
+    /// [`CG_ITERATIONS`]: the tangent is to be factorised.
+    Factorise,
+    /// The tangent is not positive definite: the preconditioner on the membrane's stencil,
+    /// which lies above it, is not, or a search direction has no positive curvature. Its
+    /// factorisation would fail too.
+    Indefinite,
+}
+
 /// Solves `K d = rhs` for the tangent `K` in `values` (on `layout`'s pattern) by conjugate
 /// gradients preconditioned with its factorisation on the membrane's stencil (docs/solver.md,
-/// "Conjugate gradients on the membrane's stencil"); `None` where there is no
-/// `preconditioner`, it is not positive definite, or the iterations do not converge within
-/// [`CG_ITERATIONS`]: then the tangent is factorised.
+/// "Conjugate gradients on the membrane's stencil"), or says why not.
 fn iterative_solve(
     layout: &Layout,
     preconditioner: Option<&mut Preconditioner>,
     values: &[f64],
     rhs: &[f64],
     stats: &mut ImplicitStatistics,
-) -> Option<Vec<f64>> {
-    let p = preconditioner?;
+) -> Result<Vec<f64>, NotIterated> {
+    let p = preconditioner.ok_or(NotIterated::Factorise)?;
     p.sparsified.values(values, &mut p.values);
     stats.preconditioner_factorisations += 1;
     p.cholesky
         .factorise(&p.sparsified.pattern, &p.values)
-        .ok()?;
+        .map_err(|_| NotIterated::Indefinite)?;
     let solved =
         p.cholesky
             .conjugate_gradients(&layout.pattern, values, rhs, CG_TOLERANCE, CG_ITERATIONS);
@@ -182,7 +191,11 @@ fn iterative_solve(
         Ok((_, iterations)) | Err((_, iterations)) => *iterations,
     };
     stats.cg_iterations += iterations;
-    solved.ok().map(|(d, _)| d)
+    match solved {
+        Ok((d, _)) => Ok(d),
+        Err((NotSolved::NotPositiveDefinite, _)) => Err(NotIterated::Indefinite),
+        Err((NotSolved::Slow, _)) => Err(NotIterated::Factorise),
+    }
 }
 
 /// Why an increment failed.

@@ -7,7 +7,7 @@
 //! ([`Iterate::line_search`]) and what follows when it finds no step ([`Iterate::without_step`]).
 
 use super::assembly::{Evaluation, Evaluator, IncrementStart, Layout, Tangent, Trial};
-use super::{contact_entry, iterative_solve, lag_normal};
+use super::{contact_entry, iterative_solve, lag_normal, NotIterated};
 use super::{Converged, ImplicitSettings, ImplicitStatistics, NotConverged, Solved, Workspace};
 use crate::contact::potential::FrictionLag;
 use crate::solver::explicit::State;
@@ -450,12 +450,13 @@ fn descent(layout: &Layout, evaluation: &Evaluation) -> Vec<f64> {
         .collect()
 }
 
-/// `K d = descent` for the tangent `K` at the iterate (on the contact set `engaged`): the consistent tangent, or where it
-/// does not factorise the projected one (from then on for the increment), by conjugate
-/// gradients where the run has a preconditioner and they converge, else by the tangent's
-/// factorisation, its diagonal shifted where even the projected tangent does not factorise.
-/// The tangent's values stay in `work.values` and, where factorised, its factor in
-/// `work.cholesky`, for the anticipation's solves.
+/// `K d = descent` for the tangent `K` at the iterate (on the contact set `engaged`): the
+/// consistent tangent, or where it is not positive definite the projected one (from then on for
+/// the increment), by conjugate gradients where the run has a preconditioner and they converge,
+/// else by the tangent's factorisation (not tried where the preconditioner or the conjugate
+/// gradients showed the tangent indefinite: it would fail), its diagonal shifted where even the
+/// projected tangent does not factorise. The tangent's values stay in `work.values` and, where
+/// factorised, its factor in `work.cholesky`, for the anticipation's solves.
 fn solve_tangent(
     problem: &Problem,
     work: &mut Workspace,
@@ -491,22 +492,27 @@ fn solve_tangent(
             .map_err(|(k, e)| it.failure(Vec::new(), format!("element {k}: {e}")))?;
         stats.assembly_seconds += clock.elapsed().as_secs_f64();
         let clock = Instant::now();
-        let iterated = iterative_solve(
+        match iterative_solve(
             layout,
             work.preconditioner.as_mut(),
             &work.values,
             descent,
             stats,
-        );
-        if let Some(solved) = iterated {
-            stats.solve_seconds += clock.elapsed().as_secs_f64();
-            return Ok(solved);
+        ) {
+            Ok(solved) => {
+                stats.solve_seconds += clock.elapsed().as_secs_f64();
+                return Ok(solved);
+            }
+            // factorising it would fail too: on to the projected tangent
+            Err(NotIterated::Indefinite) => {}
+            Err(NotIterated::Factorise) => {
+                factored = work
+                    .cholesky
+                    .factorise(&layout.pattern, &work.values)
+                    .is_ok();
+                stats.factorisations += 1;
+            }
         }
-        factored = work
-            .cholesky
-            .factorise(&layout.pattern, &work.values)
-            .is_ok();
-        stats.factorisations += 1;
         stats.solve_seconds += clock.elapsed().as_secs_f64();
         if factored || it.projected {
             break;
@@ -578,8 +584,9 @@ fn anticipate_contact_entries(
             &pushed,
             stats,
         ) {
-            Some(solved) => solved,
-            None => {
+            Ok(solved) => solved,
+            Err(NotIterated::Indefinite) => break,
+            Err(NotIterated::Factorise) => {
                 stats.factorisations += 1;
                 if work
                     .cholesky
