@@ -6,26 +6,12 @@
 
 mod common;
 
-use common::{assert_bad_input, repo_path, scratch_dir, thermostamp};
+use common::{assert_bad_input, repo_path, scratch_dir, thermostamp, write_stl};
 use std::path::{Path, PathBuf};
 use thermostamp::forming::preflight::{estimate_from_keys, implicit_advice, BlankSize};
 use thermostamp::forming::Scenario;
 use thermostamp::material::MaterialCard;
 use thermostamp::solver::SolverKind;
-
-/// An ASCII STL of `facets` (corners counter-clockwise seen from the side they face).
-fn write_stl(path: &Path, facets: &[[[f64; 3]; 3]]) {
-    let mut text = String::from("solid tool\n");
-    for f in facets {
-        text.push_str("  facet normal 0 0 0\n    outer loop\n");
-        for p in f {
-            text.push_str(&format!("      vertex {} {} {}\n", p[0], p[1], p[2]));
-        }
-        text.push_str("    endloop\n  endfacet\n");
-    }
-    text.push_str("endsolid tool\n");
-    std::fs::write(path, text).unwrap();
-}
 
 /// The apex of the punch (mm, below the blank's mid-plane at z = 0) and the die's flat face
 /// above it: the punch's tip meets the die after [`CLOSING`] mm of stroke less the ply.
@@ -68,6 +54,18 @@ fn crushing_scenario(dir: &Path, stroke: f64) -> PathBuf {
     path
 }
 
+/// `thermostamp run scenario --output out`: exit code, standard output and standard error.
+fn run_into(scenario: &Path, out: &Path) -> (Option<i32>, String, String) {
+    let run = thermostamp(&[
+        "run",
+        scenario.to_str().unwrap(),
+        "--output",
+        out.to_str().unwrap(),
+    ]);
+    let text = |bytes: &[u8]| String::from_utf8_lossy(bytes).into_owned();
+    (run.status.code(), text(&run.stdout), text(&run.stderr))
+}
+
 /// The column `name` of a CSV's last row.
 fn last_value(csv: &Path, name: &str) -> String {
     let text = std::fs::read_to_string(csv).unwrap();
@@ -89,15 +87,8 @@ fn a_blank_crushed_against_a_closed_die_keeps_its_last_converged_state() {
     let dir = scratch_dir("implicit-stops", "crushed");
     let scenario = crushing_scenario(&dir, 8.0);
     let out = dir.join("out");
-    let run = thermostamp(&[
-        "run",
-        scenario.to_str().unwrap(),
-        "--output",
-        out.to_str().unwrap(),
-    ]);
-    let stderr = String::from_utf8_lossy(&run.stderr);
-    let stdout = String::from_utf8_lossy(&run.stdout);
-    assert_eq!(run.status.code(), Some(1), "{stdout}\n{stderr}");
+    let (code, stdout, stderr) = run_into(&scenario, &out);
+    assert_eq!(code, Some(1), "{stdout}\n{stderr}");
     assert!(stderr.contains("did not converge"), "{stderr}");
     for key in [
         "what to try",
@@ -154,15 +145,8 @@ fn a_scenario_without_a_solver_runs_implicitly() {
     let dir = scratch_dir("implicit-stops", "default");
     let scenario = crushing_scenario(&dir, 1.0);
     let out = dir.join("out");
-    let run = thermostamp(&[
-        "run",
-        scenario.to_str().unwrap(),
-        "--output",
-        out.to_str().unwrap(),
-    ]);
-    let stderr = String::from_utf8_lossy(&run.stderr);
-    let stdout = String::from_utf8_lossy(&run.stdout);
-    assert_eq!(run.status.code(), Some(0), "{stdout}\n{stderr}");
+    let (code, stdout, stderr) = run_into(&scenario, &out);
+    assert_eq!(code, Some(0), "{stdout}\n{stderr}");
     assert!(
         stderr.contains("estimate: implicit quasi-static run"),
         "{stderr}"
