@@ -97,10 +97,18 @@ fn forming(args: &Args) -> anyhow::Result<()> {
         write_result_row(&dir, &scenario, &forming, &result)?,
     ];
     if let Some(state) = result.formed_state() {
+        let title = match &result.outcome {
+            Ok(_) => "Formed part: shear angle (top view)".to_string(),
+            Err(_) => format!(
+                "Part at {:.2} of {} mm, the run stopped: shear angle (top view)",
+                forming.punch.displacement(state.time),
+                scenario.process.stroke
+            ),
+        };
         files.push(write_shear_map(
             &dir,
             &forming,
-            state,
+            (state, title),
             scenario.output.locking_angle,
         )?);
         files.extend(write_formed_blank(&dir, &forming.model, state)?);
@@ -271,17 +279,18 @@ fn write_force_plot(dir: &Path, records: &[FormingRecord]) -> anyhow::Result<Pat
     Ok(png)
 }
 
-/// `forming-shear-map.png`: the formed part from above, coloured by shear angle.
+/// `forming-shear-map.png`: the part in `state` from above, coloured by shear angle, under
+/// `title`.
 fn write_shear_map(
     dir: &Path,
     forming: &FormingModel,
-    state: &crate::solver::State,
+    (state, title): (&crate::solver::State, String),
     locking_angle: Option<f64>,
 ) -> anyhow::Result<PathBuf> {
     let model = &forming.model;
     let x = &state.positions;
     let map = MapPlot {
-        title: "Formed part: shear angle (top view)".into(),
+        title,
         axes: ("x (mm)".into(), "y (mm)".into()),
         equal_scales: true,
         value_label: match locking_angle {
