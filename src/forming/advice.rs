@@ -43,8 +43,10 @@ pub fn stop_advice(
         ),
     });
     if let ToolSet::Files(files) = &scenario.tools {
-        let mut named = vec![format!("tools.punch ({})", files.punch.file.display())];
-        named.push(format!("tools.die ({})", files.die.file.display()));
+        let mut named = vec![
+            format!("tools.punch ({})", files.punch.file.display()),
+            format!("tools.die ({})", files.die.file.display()),
+        ];
         if let Some(holder) = &files.holder {
             named.push(format!("tools.holder ({})", holder.file.display()));
         }
@@ -62,14 +64,13 @@ pub fn stop_advice(
     let kept = run.formed_state().map_or(String::new(), |_| {
         let reached = run.records.last().map_or(0.0, |r| r.stroke);
         format!(
-            " The part as formed at {reached:.2} mm of stroke, the last converged increment, is \
+            "The part as formed at {reached:.2} mm of stroke, the last converged increment, is \
              written (history, frames, shear map, punch-force plot, formed blank)."
         )
     });
     Some(format!(
-        "what to try (an increment did not converge, see the error below):\n  - {}\n{}",
-        lines.join("\n  - "),
-        kept.trim_start()
+        "what to try (an increment did not converge, see the error below):\n  - {}\n{kept}",
+        lines.join("\n  - ")
     ))
 }
 

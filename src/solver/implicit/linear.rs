@@ -485,7 +485,9 @@ pub enum NotSolved {
 impl Cholesky {
     /// Solves `K x = rhs`, `K` the matrix with lower triangle `values` on `pattern`, by
     /// conjugate gradients preconditioned with this factorisation (of an approximation of
-    /// `K`, e.g. a [`Sparsified`] one): [`conjugate_gradients`].
+    /// `K`, e.g. a [`Sparsified`] one), from `x = 0` until `|K x - rhs| <= tolerance |rhs|`,
+    /// within `max_iterations`: the solution and the iterations it took, or why not and after
+    /// how many. Every sum runs in a fixed order: the same bits on any number of threads.
     pub fn conjugate_gradients(
         &mut self,
         pattern: &Pattern,
@@ -494,52 +496,35 @@ impl Cholesky {
         tolerance: f64,
         max_iterations: usize,
     ) -> Result<(Vec<f64>, usize), (NotSolved, usize)> {
-        conjugate_gradients(pattern, values, rhs, (tolerance, max_iterations), |z| {
-            self.solve(z)
-        })
-    }
-}
-
-/// Solves `K x = rhs`, `K` the matrix with lower triangle `values` on `pattern`, by conjugate
-/// gradients preconditioned with `precondition` (`z <- M^-1 z` for a symmetric positive
-/// definite `M`), from `x = 0` until `|K x - rhs| <= tolerance |rhs|`, within
-/// `max_iterations` (`limits`): the solution and the iterations it took, or why not and after
-/// how many. Every sum runs in a fixed order: the same bits on any number of threads.
-pub fn conjugate_gradients(
-    pattern: &Pattern,
-    values: &[f64],
-    rhs: &[f64],
-    (tolerance, max_iterations): (f64, usize),
-    mut precondition: impl FnMut(&mut [f64]),
-) -> Result<(Vec<f64>, usize), (NotSolved, usize)> {
-    let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(a, b)| a * b).sum::<f64>();
-    let target = tolerance * dot(rhs, rhs).sqrt();
-    let mut x = vec![0.0; rhs.len()];
-    let mut r = rhs.to_vec();
-    let mut z = r.clone();
-    precondition(&mut z);
-    let mut p = z.clone();
-    let mut rz = dot(&r, &z);
-    for iteration in 1..=max_iterations {
-        let q = pattern.multiply(values, &p);
-        let curvature = dot(&p, &q);
-        if curvature <= 0.0 || !curvature.is_finite() {
-            return Err((NotSolved::NotPositiveDefinite, iteration));
+        let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(a, b)| a * b).sum::<f64>();
+        let target = tolerance * dot(rhs, rhs).sqrt();
+        let mut x = vec![0.0; rhs.len()];
+        let mut r = rhs.to_vec();
+        let mut z = r.clone();
+        self.solve(&mut z);
+        let mut p = z.clone();
+        let mut rz = dot(&r, &z);
+        for iteration in 1..=max_iterations {
+            let q = pattern.multiply(values, &p);
+            let curvature = dot(&p, &q);
+            if curvature <= 0.0 || !curvature.is_finite() {
+                return Err((NotSolved::NotPositiveDefinite, iteration));
+            }
+            let alpha = rz / curvature;
+            x.iter_mut().zip(&p).for_each(|(x, p)| *x += alpha * p);
+            r.iter_mut().zip(&q).for_each(|(r, q)| *r -= alpha * q);
+            if dot(&r, &r).sqrt() <= target {
+                return Ok((x, iteration));
+            }
+            z.copy_from_slice(&r);
+            self.solve(&mut z);
+            let next = dot(&r, &z);
+            let beta = next / rz;
+            rz = next;
+            p.iter_mut().zip(&z).for_each(|(p, z)| *p = z + beta * *p);
         }
-        let alpha = rz / curvature;
-        x.iter_mut().zip(&p).for_each(|(x, p)| *x += alpha * p);
-        r.iter_mut().zip(&q).for_each(|(r, q)| *r -= alpha * q);
-        if dot(&r, &r).sqrt() <= target {
-            return Ok((x, iteration));
-        }
-        z.copy_from_slice(&r);
-        precondition(&mut z);
-        let next = dot(&r, &z);
-        let beta = next / rz;
-        rz = next;
-        p.iter_mut().zip(&z).for_each(|(p, z)| *p = z + beta * *p);
+        Err((NotSolved::Slow, max_iterations))
     }
-    Err((NotSolved::Slow, max_iterations))
 }
 
 #[cfg(test)]
