@@ -120,7 +120,7 @@ pub fn pair_contact(
     if let (Some((energy, gradient, n, force, curvature)), Some(p)) = (normal, nearest) {
         pair.energy = energy;
         pair.gradient = gradient;
-        pair.normal = n;
+        pair.normal = n.normalize();
         pair.normal_force = force;
         pair.hessian = match hessian {
             PairHessian::None => Matrix3::zeros(),
