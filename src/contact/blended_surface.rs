@@ -316,6 +316,30 @@ mod tests {
         }
     }
 
+    /// Past the inner rim of a flat holder (an open edge), below its top, a point is beside
+    /// the holder, not in it; above the top, no nearer than the plane; over the plate, at its
+    /// height.
+    #[test]
+    fn past_an_open_edge_the_tool_ends_in_a_wall() {
+        let holder = crate::contact::blank_holder(20.0, 60.0, 2.0).unwrap();
+        let blend = BlendedSurface::new(&holder, 0.3);
+        let at = |y: Vector3<f64>| blend.distance(&holder, &all(&holder), &y).unwrap();
+        // the rim is a polygon inscribed in r = 20: distances within its sagitta; beside the
+        // rim the facets that touch it at a corner only still count with their plane
+        // (-0.1 here), so the value lies between that and the wall's 0.2, outside the tool
+        let beside = at(Vector3::new(19.8, 0.0, -0.1));
+        assert!(
+            beside.value > 0.0 && beside.value < 0.21,
+            "{}",
+            beside.value
+        );
+        let above = at(Vector3::new(19.8, 0.0, 0.15));
+        // likewise between the plane's 0.15 and the rim's 0.25
+        assert!(above.value > 0.15 && above.value < 0.26, "{}", above.value);
+        let over = at(Vector3::new(30.0, 1.0, 0.2));
+        assert!((over.value - 0.2).abs() < 1e-12, "{}", over.value);
+    }
+
     /// The gradient is the derivative of the value and the Hessian that of the gradient
     /// (central differences), over faces, edges and corners of a faceted cap and a die's
     /// fillet.
