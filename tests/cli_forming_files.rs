@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{assert_bad_input, repo_path, scratch_dir};
+use common::{assert_bad_input, repo_path, scratch_dir, write_stl};
 use std::path::{Path, PathBuf};
 
 const PROCESS: &str = "[process]\ntemperature = 300.0\nstroke = 10.0\npunch_speed = 10.0\n";
@@ -27,20 +27,6 @@ fn scenario(dir: &Path, name: &str, blank: &str, tools: &str, more: (&str, &str)
 
 fn refused(path: &Path, expected: &[&str]) {
     assert_bad_input(&["run", path.to_str().unwrap()], expected);
-}
-
-/// An ASCII STL of `facets` (corners counter-clockwise seen from the side they face).
-fn write_stl(path: &Path, facets: &[[[f64; 3]; 3]]) {
-    let mut text = String::from("solid tool\n");
-    for f in facets {
-        text.push_str("  facet normal 0 0 0\n    outer loop\n");
-        for p in f {
-            text.push_str(&format!("      vertex {} {} {}\n", p[0], p[1], p[2]));
-        }
-        text.push_str("    endloop\n  endfacet\n");
-    }
-    text.push_str("endsolid tool\n");
-    std::fs::write(path, text).unwrap();
 }
 
 /// Corners of the 200 mm square about the axis in the plane z = `z`, counter-clockwise.

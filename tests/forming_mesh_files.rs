@@ -26,7 +26,7 @@ fn scenario_text(blank: &str, tools: &str) -> String {
     let card = repo_path("materials/t300-5hs-pps.toml");
     format!(
         "[blank]\ncard = {card:?}\n{blank}\n\n[tools]\n{tools}\n\n\
-         [process]\ntemperature = 300.0\nstroke = 20.0\npunch_speed = 10.0\n\
+         [process]\nsolver = \"explicit\"\ntemperature = 300.0\nstroke = 20.0\npunch_speed = 10.0\n\
          blank_holder_force = 200.0\ntime_scaling = 10.0\ntarget_time_step = 5e-6\n\n\
          [process.friction]\npunch = 0.2\ndie = 0.2\nholder = 0.2\n\n\
          [output]\nhistory_points = 10\n"

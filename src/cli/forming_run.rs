@@ -6,7 +6,9 @@ use super::shared::{
     ScenarioArgs, Watch,
 };
 use crate::experiment::sheet_test::{FrameOutput, HistorySink, LiveOutput};
+use crate::forming::advice::stop_advice;
 use crate::forming::export::{write_formed_blank, FORMED_INP, FORMED_VTU};
+use crate::forming::preflight::implicit_advice;
 use crate::forming::run::{shear_angles, RESULT_COLUMNS, RESULT_CSV};
 use crate::forming::{run::FormingRun, FormingModel, FormingRecord, Scenario};
 use crate::io::output_folder::ProductFiles;
@@ -76,6 +78,9 @@ fn forming(args: &Args) -> anyhow::Result<()> {
         },
     };
     eprintln!("{}", describe(&forming.estimate, forming.solver));
+    if let Some(advice) = implicit_advice(&scenario, &forming.estimate) {
+        eprintln!("note: {advice}");
+    }
     let mut bar = Bar::new(forming.settings.end_time);
     let mut watch = Watch {
         bar: &mut bar,
@@ -91,11 +96,19 @@ fn forming(args: &Args) -> anyhow::Result<()> {
         write_force_plot(&dir, &result.records)?,
         write_result_row(&dir, &scenario, &forming, &result)?,
     ];
-    if let Ok(state) = &result.outcome {
+    if let Some(state) = result.formed_state() {
+        let title = match &result.outcome {
+            Ok(_) => "Formed part: shear angle (top view)".to_string(),
+            Err(_) => format!(
+                "Part at {:.2} of {} mm, the run stopped: shear angle (top view)",
+                forming.punch.displacement(state.time),
+                scenario.process.stroke
+            ),
+        };
         files.push(write_shear_map(
             &dir,
             &forming,
-            state,
+            (state, title),
             scenario.output.locking_angle,
         )?);
         files.extend(write_formed_blank(&dir, &forming.model, state)?);
@@ -104,6 +117,9 @@ fn forming(args: &Args) -> anyhow::Result<()> {
         files.push(dir.join(format!("{SERIES}.pvd")));
     }
     print_summary(&scenario, &forming, &result, &files);
+    if let Some(advice) = stop_advice(&scenario, &forming, &result) {
+        eprintln!("{advice}");
+    }
     result.outcome.map(|_| ()).map_err(anyhow::Error::from)
 }
 
@@ -191,8 +207,8 @@ fn write_result_row(
 ) -> anyhow::Result<PathBuf> {
     let last = result.records.last();
     let model = &forming.model;
-    let (above_locking, thinning) = match &result.outcome {
-        Ok(state) => {
+    let (above_locking, thinning) = match result.formed_state() {
+        Some(state) => {
             let gamma = shear_angles(model, state);
             let above = scenario.output.locking_angle.map(|limit| {
                 model
@@ -211,7 +227,7 @@ fn write_result_row(
                 .fold(f64::INFINITY, f64::min);
             (above, Some(1.0 - thinnest / t0))
         }
-        Err(_) => (None, None),
+        None => (None, None),
     };
     let flange = |v: f64| forming.measures_flange().then_some(v);
     let number = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v:e}"));
@@ -263,17 +279,18 @@ fn write_force_plot(dir: &Path, records: &[FormingRecord]) -> anyhow::Result<Pat
     Ok(png)
 }
 
-/// `forming-shear-map.png`: the formed part from above, coloured by shear angle.
+/// `forming-shear-map.png`: the part in `state` from above, coloured by shear angle, under
+/// `title`.
 fn write_shear_map(
     dir: &Path,
     forming: &FormingModel,
-    state: &crate::solver::State,
+    (state, title): (&crate::solver::State, String),
     locking_angle: Option<f64>,
 ) -> anyhow::Result<PathBuf> {
     let model = &forming.model;
     let x = &state.positions;
     let map = MapPlot {
-        title: "Formed part: shear angle (top view)".into(),
+        title,
         axes: ("x (mm)".into(), "y (mm)".into()),
         equal_scales: true,
         value_label: match locking_angle {

@@ -169,7 +169,8 @@ pub fn status_row(outcome: &Result<State, SolverError>) -> (&'static str, String
         Err(SolverError::NotConverged {
             increment, time, ..
         }) => format!(
-            "did not converge: increment {increment} from t = {time:.4e} s, results so far kept"
+            "stopped: increment {increment} from t = {time:.4e} s did not converge; results up \
+             to the last converged increment kept"
         ),
         Err(SolverError::Settings(_)) => "not started: bad solver settings".to_string(),
     };

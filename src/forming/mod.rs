@@ -1,6 +1,7 @@
 //! Thermo-stamping runs (docs/model.md §6): a scenario file, the model it describes (blank, card,
 //! tools), the run with its histories, and the formed blank written for the next analysis.
 
+pub mod advice;
 pub mod drape_preview;
 pub mod export;
 pub mod preflight;

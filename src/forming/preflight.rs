@@ -203,6 +203,33 @@ fn step_count_keys(step_keys: &str) -> (&str, &str, &str) {
     )
 }
 
+/// An explicit run's estimated wall time from which its estimate is followed by the implicit
+/// solver's on the same blank, and how to choose it (s) **(choice)**: ten minutes.
+pub const IMPLICIT_ADVICE_SECONDS: f64 = 600.0;
+
+/// For an explicit run of `s` estimated (`estimate`) at more than [`IMPLICIT_ADVICE_SECONDS`]:
+/// that the implicit solver exists, its estimate on the same blank (its default increments,
+/// docs/solver.md "Increments") and how to choose it.
+pub fn implicit_advice(s: &Scenario, estimate: &RunEstimate) -> Option<String> {
+    if s.process.solver != SolverKind::Explicit || estimate.wall_seconds <= IMPLICIT_ADVICE_SECONDS
+    {
+        return None;
+    }
+    let implicit = implicit::wall_seconds_of_size(
+        estimate.size.elements as f64,
+        implicit::DEFAULT_INCREMENTS,
+        rayon::current_num_threads(),
+    );
+    Some(format!(
+        "the explicit solver needs about {} for this run; the implicit solver forms the same \
+         stroke quasi-statically at the physical punch speed in about {}: set process.solver = \
+         \"implicit\" (the default where the scenario does not choose) and leave out \
+         process.time_scaling and process.target_time_step (docs/solver.md, \"Which solver\")",
+        estimate::format_seconds(estimate.wall_seconds),
+        estimate::format_seconds(implicit),
+    ))
+}
+
 /// The explicit solver's safety factor on its stable step (`SolverSettings::time_step_safety`
 /// of a forming run).
 pub const SAFETY: f64 = 0.9;

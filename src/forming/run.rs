@@ -44,6 +44,25 @@ pub struct FormingRun {
     pub checks: CheckReport,
     /// Increments, iterations and time split of an implicit run.
     pub implicit: Option<ImplicitStatistics>,
+    /// The state of the last record: where an implicit increment did not converge, the last
+    /// converged state, which the run recorded before it stopped.
+    pub last_recorded: Option<State>,
+}
+
+impl FormingRun {
+    /// The state the part's pictures and files are made of: the final one, or for a run that
+    /// stopped because an increment did not converge or the user asked, the last one recorded
+    /// (its frames and history end there too). `None` for a run stopped as meaningless.
+    pub fn formed_state(&self) -> Option<&State> {
+        match &self.outcome {
+            Ok(state) => Some(state),
+            Err(SolverError::NotConverged { .. } | SolverError::Interrupted { .. }) => self
+                .last_recorded
+                .as_ref()
+                .filter(|s| s.positions.iter().all(|x| x.iter().all(|c| c.is_finite()))),
+            Err(_) => None,
+        }
+    }
 }
 
 struct Recorder<'a, 'p, 'o> {
@@ -58,6 +77,7 @@ struct Recorder<'a, 'p, 'o> {
     last_impulse: Option<(f64, Vector3<f64>)>,
     /// Set once the user asked to stop: the next record is the last.
     stopping: bool,
+    last_recorded: Option<State>,
 }
 
 impl Recorder<'_, '_, '_> {
@@ -98,6 +118,7 @@ impl Observer for Recorder<'_, '_, '_> {
             energies: state.energies,
         });
         self.steps = state.step;
+        self.last_recorded = Some(state.clone());
         if let Some(output) = &mut self.output {
             output.at_record(&self.records, self.stopping, model, state)?;
         }
@@ -157,6 +178,7 @@ pub fn run(
         steps: 0,
         last_impulse: None,
         stopping: false,
+        last_recorded: None,
     };
     let mut statistics = ImplicitStatistics::default();
     let (outcome, checks) = match check_settings(forming) {
@@ -190,6 +212,7 @@ pub fn run(
         wall_seconds: start.elapsed().as_secs_f64(),
         checks,
         implicit: (forming.solver == SolverKind::Implicit).then_some(statistics),
+        last_recorded: recorder.last_recorded,
     }
 }
 

@@ -351,7 +351,7 @@ pub struct Process {
     pub time_scaling: f64,
     /// Mass scaling to this time step (s).
     pub target_time_step: Option<f64>,
-    /// `"explicit"` (the default) or `"implicit"` (docs/solver.md): the implicit solver runs
+    /// `"implicit"` (the default) or `"explicit"` (docs/solver.md): the implicit solver runs
     /// the physical stroke quasi-statically, without time or mass scaling.
     #[serde(default)]
     pub solver: SolverKind,
@@ -614,9 +614,10 @@ impl Scenario {
             ];
             if let Some((key, _)) = explicit_only.iter().find(|(_, set)| *set) {
                 return Err(format!(
-                    "{key} is only used by the explicit solver; with process.solver = \
-                     \"implicit\" the stroke runs at the physical speed without inertia: leave \
-                     {key} out"
+                    "{key} is only used by the explicit solver; the implicit solver (the \
+                     default where process.solver is not given) runs the stroke at the physical \
+                     speed without inertia: leave {key} out, or set process.solver = \
+                     \"explicit\""
                 ));
             }
         } else if p.max_increment.is_some() {

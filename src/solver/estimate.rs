@@ -334,7 +334,7 @@ pub fn format_bytes(bytes: f64) -> String {
 }
 
 /// `40 s`, `12 min`, `3.1 h`.
-fn format_seconds(s: f64) -> String {
+pub fn format_seconds(s: f64) -> String {
     if s < 120.0 {
         format!("{s:.0} s")
     } else if s < 7200.0 {

@@ -20,9 +20,10 @@ pub use model::{Constraint, Model, Motion};
 pub enum SolverKind {
     /// Central differences with lumped mass (`explicit`): the reference, and the tool for fast
     /// events; quasi-static runs need mass or time scaling.
-    #[default]
     Explicit,
-    /// Quasi-static Newton increments at the physical speed (`implicit`).
+    /// Quasi-static Newton increments at the physical speed (`implicit`): a scenario's solver
+    /// where it does not choose.
+    #[default]
     Implicit,
 }
 

@@ -353,3 +353,17 @@ pub fn implicit_bias_test(
     test.process.history_points = records;
     test
 }
+
+/// An ASCII STL of `facets` (corners counter-clockwise seen from the side they face).
+pub fn write_stl(path: &std::path::Path, facets: &[[[f64; 3]; 3]]) {
+    let mut text = String::from("solid tool\n");
+    for f in facets {
+        text.push_str("  facet normal 0 0 0\n    outer loop\n");
+        for p in f {
+            text.push_str(&format!("      vertex {} {} {}\n", p[0], p[1], p[2]));
+        }
+        text.push_str("    endloop\n  endfacet\n");
+    }
+    text.push_str("endsolid tool\n");
+    std::fs::write(path, text).unwrap();
+}

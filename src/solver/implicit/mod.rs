@@ -20,6 +20,7 @@
 pub mod assembly;
 pub mod contact_entry;
 pub mod linear;
+mod newton;
 mod supernodal;
 
 use super::energy::Energies;
@@ -29,9 +30,9 @@ use crate::contact::penalty::nodes_through_tools;
 use crate::contact::potential::{penalty_stiffness, FrictionLag};
 use crate::contact::{RigidTool, ToolMotion};
 use assembly::{Evaluation, Evaluator, IncrementStart, Layout, NearLists, Tangent, Trial};
-use linear::{Cholesky, Sparsified};
+use linear::{Cholesky, NotSolved, Sparsified};
 use nalgebra::{Matrix2, Vector3};
-use std::time::Instant;
+use newton::{newton, Problem};
 
 /// How to solve.
 #[derive(Clone, Debug, PartialEq)]
@@ -156,24 +157,33 @@ impl Preconditioner {
     }
 }
 
+/// Why a linear solve was not made by conjugate gradients.
+enum NotIterated {
+    /// There is no preconditioner, or the iterations did not converge within
+    /// [`CG_ITERATIONS`]: the tangent is to be factorised.
+    Factorise,
+    /// The tangent is not positive definite: the preconditioner on the membrane's stencil,
+    /// which lies above it, is not, or a search direction has no positive curvature. Its
+    /// factorisation would fail too.
+    Indefinite,
+}
+
 /// Solves `K d = rhs` for the tangent `K` in `values` (on `layout`'s pattern) by conjugate
 /// gradients preconditioned with its factorisation on the membrane's stencil (docs/solver.md,
-/// "Conjugate gradients on the membrane's stencil"); `None` where there is no
-/// `preconditioner`, it is not positive definite, or the iterations do not converge within
-/// [`CG_ITERATIONS`]: then the tangent is factorised.
+/// "Conjugate gradients on the membrane's stencil"), or says why not.
 fn iterative_solve(
     layout: &Layout,
     preconditioner: Option<&mut Preconditioner>,
     values: &[f64],
     rhs: &[f64],
     stats: &mut ImplicitStatistics,
-) -> Option<Vec<f64>> {
-    let p = preconditioner?;
+) -> Result<Vec<f64>, NotIterated> {
+    let p = preconditioner.ok_or(NotIterated::Factorise)?;
     p.sparsified.values(values, &mut p.values);
     stats.preconditioner_factorisations += 1;
     p.cholesky
         .factorise(&p.sparsified.pattern, &p.values)
-        .ok()?;
+        .map_err(|_| NotIterated::Indefinite)?;
     let solved =
         p.cholesky
             .conjugate_gradients(&layout.pattern, values, rhs, CG_TOLERANCE, CG_ITERATIONS);
@@ -181,7 +191,11 @@ fn iterative_solve(
         Ok((_, iterations)) | Err((_, iterations)) => *iterations,
     };
     stats.cg_iterations += iterations;
-    solved.ok().map(|(d, _)| d)
+    match solved {
+        Ok((d, _)) => Ok(d),
+        Err((NotSolved::NotPositiveDefinite, _)) => Err(NotIterated::Indefinite),
+        Err((NotSolved::Slow, _)) => Err(NotIterated::Factorise),
+    }
 }
 
 /// Why an increment failed.
@@ -583,15 +597,14 @@ fn close_force_driven_tools(
         return;
     }
     let held = (state.positions.clone(), state.tool_translations.clone());
-    let Ok((evaluation, x, translations, _)) = newton(
+    let closing = Problem {
         evaluator,
-        work,
-        (state, converged),
+        state,
+        converged,
         dt,
-        held,
         settings,
-        stats,
-    ) else {
+    };
+    let Ok((evaluation, x, translations, _)) = newton(&closing, work, held, stats) else {
         return;
     };
     accept(
@@ -650,21 +663,28 @@ fn predictor(model: &Model, state: &State, dt: f64) -> (Vec<Vector3<f64>>, Vec<V
 
 type Solved = (Evaluation, Vec<Vector3<f64>>, Vec<Vector3<f64>>, usize);
 
-/// One increment of duration `dt`: Newton's method with friction lagged at the increment's
-/// start and lagged again, as it converges, with the normal forces it reaches
-/// ([`FRICTION_LAG_CHANGE`], at most [`FRICTION_PASSES`] times): a node that comes into contact
-/// during the increment would otherwise slide it without friction, and the friction force
-/// would lag the stroke by an increment.
+/// One increment of duration `dt` from the predictor ([`predictor`]): Newton's method
+/// ([`newton::newton`]) with friction lagged at the increment's start and lagged again, as it
+/// converges, with the normal forces it reaches: a node that comes into contact during the
+/// increment would otherwise slide it without friction, and the friction force would lag the
+/// stroke by an increment.
 fn increment(
     evaluator: &Evaluator,
     work: &mut Workspace,
-    from: (&State, &Converged),
+    (state, converged): (&State, &Converged),
     dt: f64,
     settings: &ImplicitSettings,
     stats: &mut ImplicitStatistics,
 ) -> Result<Solved, NotConverged> {
-    let guess = predictor(evaluator.model, from.0, dt);
-    let solved = newton(evaluator, work, from, dt, guess, settings, stats)?;
+    let guess = predictor(evaluator.model, state, dt);
+    let problem = Problem {
+        evaluator,
+        state,
+        converged,
+        dt,
+        settings,
+    };
+    let solved = newton(&problem, work, guess, stats)?;
     // the contact's own test sees the tools' triangles near each node only: a tool that moved
     // past a node in one increment is found by a full search
     let model = evaluator.model;
@@ -679,438 +699,12 @@ fn increment(
     Ok(solved)
 }
 
-/// Friction lagged again with the normal forces of the iterate `evaluation`, when they differ
-/// from the lagged ones by more than [`FRICTION_LAG_CHANGE`] of their sum; the slip still
-/// counts from the increment's start, along the start's tangent plane where there was one.
-fn refined_lags(
-    model: &Model,
-    state: &State,
-    lags: &[Vec<Option<FrictionLag>>],
-    evaluation: &Evaluation,
-    x: &[Vector3<f64>],
-    translations: &[Vector3<f64>],
-) -> Option<Vec<Vec<Option<FrictionLag>>>> {
-    let mut change = 0.0;
-    let mut total = 0.0;
-    let mut refined = lags.to_vec();
-    for (a, contact) in evaluation.contacts.iter().enumerate() {
-        for (k, tool) in model.tools.iter().enumerate() {
-            if tool.friction <= 0.0 {
-                continue;
-            }
-            let limit = tool.friction * contact.normal_force.get(k).copied().unwrap_or(0.0);
-            let lagged = lags[a][k].map_or(0.0, |l| l.limit);
-            change += (limit - lagged).abs();
-            total += limit;
-            refined[a][k] = (limit > 0.0).then(|| match lags[a][k] {
-                Some(lag) => FrictionLag { limit, ..lag },
-                None => FrictionLag {
-                    limit,
-                    normal: lag_normal(tool, &(x[a] - translations[k])),
-                    start: state.positions[a] - state.tool_translations[k],
-                    carried: Vector3::zeros(),
-                },
-            });
-        }
-    }
-    (change > FRICTION_LAG_CHANGE * total).then_some(refined)
-}
-
 /// The tool's normal at a node at `y` (relative to the tool) that friction is lagged with.
 fn lag_normal(tool: &RigidTool, y: &Vector3<f64>) -> Vector3<f64> {
     // unit: a blended surface's normal is its distance's gradient, nearly so
     tool.nearest(y)
         .map_or(Vector3::z(), |p| p.direction_to(y).0.normalize())
 }
-
-/// Newton's method on one increment of `dt` from the converged `state`, beginning at `guess`
-/// (positions and tool translations), friction lagged from the increment's start and then
-/// from the normal forces reached once the residual is within [`LAG_REFRESH_BAND`] of its
-/// tolerance.
-fn newton(
-    evaluator: &Evaluator,
-    work: &mut Workspace,
-    (state, converged): (&State, &Converged),
-    dt: f64,
-    guess: (Vec<Vector3<f64>>, Vec<Vector3<f64>>),
-    settings: &ImplicitSettings,
-    stats: &mut ImplicitStatistics,
-) -> Result<Solved, NotConverged> {
-    let mut lags = converged.friction.clone();
-    let mut refreshes = 0;
-    let model = evaluator.model;
-    let layout = evaluator.layout;
-    let (mut x, mut translations) = guess;
-    let mut z = unknowns(layout, &x, &translations);
-    let mut residuals = Vec::new();
-    let mut projected = false;
-    let fail =
-        |residuals: Vec<f64>, evaluation: Option<&Evaluation>, reason: String| NotConverged {
-            worst_nodes: evaluation.map_or(Vec::new(), |e| worst_nodes(layout, &e.residual)),
-            residuals,
-            reason,
-        };
-    let mut frozen: Option<Vec<Vec<bool>>> = None;
-    let mut freezes = 0;
-    let mut worst = Vec::new();
-    // the accepted line-search probe, the residual where the next iteration starts, with the
-    // contact set it was evaluated on
-    let mut carried: Option<(Evaluation, Option<Vec<Vec<bool>>>)> = None;
-    for iteration in 0..settings.max_iterations {
-        stats.iterations += 1;
-        let start = &IncrementStart {
-            positions: &state.positions,
-            strains: &converged.strains,
-            laminate_states: &state.laminate_states,
-            friction: &lags,
-            velocities: &state.velocities,
-            masses: &state.masses,
-            dt,
-        };
-        // a solution on the frozen contact set, taken on the free set where it holds there
-        let on_free = |x: &[Vector3<f64>],
-                       translations: &[Vector3<f64>],
-                       evaluation: &Evaluation,
-                       scale: f64,
-                       stats: &mut ImplicitStatistics,
-                       residuals: &[f64]| {
-            let tolerance = settings.tolerance * scale;
-            on_free_set(
-                evaluator,
-                start,
-                (x, translations),
-                evaluation,
-                tolerance,
-                stats,
-            )
-            .map_err(|(k, e)| fail(residuals.to_vec(), None, format!("element {k}: {e}")))
-        };
-        let engaged = frozen.clone();
-        work.near.refresh(model, &x, &translations);
-        let trial = Trial {
-            positions: &x,
-            translations: &translations,
-            engaged: engaged.as_deref(),
-            near: Some(work.near.lists()),
-        };
-        let evaluation = match carried.take().filter(|(_, set)| *set == engaged) {
-            Some((evaluation, _)) => evaluation,
-            None => {
-                let clock = Instant::now();
-                let evaluation = evaluator
-                    .residual(start, &trial)
-                    .map_err(|(k, e)| fail(residuals.clone(), None, format!("element {k}: {e}")))?;
-                stats.assembly_seconds += clock.elapsed().as_secs_f64();
-                evaluation
-            }
-        };
-        let norm = free_norm(layout, &evaluation.residual);
-        if !norm.is_finite() {
-            return Err(fail(
-                residuals,
-                None,
-                "the forces at the trial are not finite numbers: a speed, load or stiffness of \
-                 the model is beyond what double precision holds"
-                    .into(),
-            ));
-        }
-        residuals.push(norm);
-        if iteration + 1 == settings.max_iterations {
-            worst = worst_nodes(layout, &evaluation.residual);
-        }
-        let scale = force_scale(layout, &evaluation).max(layout.force_floor);
-        if norm <= LAG_REFRESH_BAND * settings.tolerance * scale && refreshes < FRICTION_PASSES {
-            if let Some(better) = refined_lags(model, state, &lags, &evaluation, &x, &translations)
-            {
-                lags = better;
-                refreshes += 1;
-                carried = None;
-                // a new incremental problem: Newton's method starts over on it from here
-                residuals.clear();
-                frozen = None;
-                freezes = 0;
-                projected = false;
-                continue;
-            }
-        }
-        if norm <= settings.tolerance * scale {
-            if evaluation.tunnelled > 0 {
-                return Err(fail(
-                    residuals,
-                    Some(&evaluation),
-                    format!(
-                        "{} nodes came to rest behind a tool beyond the contact's reach",
-                        evaluation.tunnelled
-                    ),
-                ));
-            }
-            if frozen.is_none() {
-                return Ok((evaluation, x, translations, iteration + 1));
-            }
-            // solved on the frozen contact set: the solution if the set is the right one
-            if let Some(free) = on_free(&x, &translations, &evaluation, scale, stats, &residuals)? {
-                return Ok((free, x, translations, iteration + 1));
-            }
-            frozen = None;
-            continue;
-        }
-        if frozen.is_none() && residuals.len() >= FREEZE_AFTER * (freezes + 1) {
-            freezes += 1;
-            frozen = Some(active_set(&evaluation));
-        }
-        let kind = if projected {
-            Tangent::Projected
-        } else {
-            Tangent::Consistent
-        };
-        let descent = || -> Vec<f64> {
-            evaluation
-                .residual
-                .iter()
-                .zip(&layout.held)
-                .map(|(r, &held)| if held { 0.0 } else { -r })
-                .collect()
-        };
-        let mut factored = false;
-        let mut iterated = None;
-        for kind in [kind, Tangent::Projected] {
-            let clock = Instant::now();
-            evaluator
-                .tangent(start, &trial, &evaluation, kind, &mut work.values)
-                .map_err(|(k, e)| fail(residuals.clone(), None, format!("element {k}: {e}")))?;
-            stats.assembly_seconds += clock.elapsed().as_secs_f64();
-            let clock = Instant::now();
-            iterated = iterative_solve(
-                layout,
-                work.preconditioner.as_mut(),
-                &work.values,
-                &descent(),
-                stats,
-            );
-            if iterated.is_some() {
-                stats.solve_seconds += clock.elapsed().as_secs_f64();
-                factored = true;
-                break;
-            }
-            factored = work
-                .cholesky
-                .factorise(&layout.pattern, &work.values)
-                .is_ok();
-            stats.factorisations += 1;
-            stats.solve_seconds += clock.elapsed().as_secs_f64();
-            if factored || projected {
-                break;
-            }
-            projected = true;
-            stats.projected += 1;
-        }
-        let values = &mut work.values;
-        let clock = Instant::now();
-        let mut shift = 1e-10;
-        while !factored && shift < 1.0 {
-            shift_diagonal(layout, values, shift);
-            factored = work.cholesky.factorise(&layout.pattern, values).is_ok();
-            stats.factorisations += 1;
-            shift *= 100.0;
-        }
-        if !factored {
-            return Err(fail(
-                residuals,
-                Some(&evaluation),
-                "the tangent could not be factorised even when shifted".into(),
-            ));
-        }
-        let mut direction = iterated.unwrap_or_else(|| {
-            let mut direct = descent();
-            work.cholesky.solve(&mut direct);
-            direct
-        });
-        let correction = largest_free(layout, &direction);
-        // the springs the correction enters, anticipated in the linear model (kept where the
-        // correction still descends)
-        let mut anticipated = Vec::new();
-        let mut newton_direction = None;
-        for _ in 0..ANTICIPATION_ROUNDS {
-            let entries = contact_entry::entering(
-                model,
-                layout,
-                &evaluation,
-                (&x, &translations),
-                frozen.as_deref(),
-                &direction,
-                &anticipated,
-            );
-            if entries.is_empty() {
-                break;
-            }
-            contact_entry::add_springs(layout, &entries, &mut work.values);
-            anticipated.extend(entries);
-            let mut pushed = descent();
-            contact_entry::add_pushes(layout, &anticipated, &mut pushed);
-            let solved = match iterative_solve(
-                layout,
-                work.preconditioner.as_mut(),
-                &work.values,
-                &pushed,
-                stats,
-            ) {
-                Some(solved) => solved,
-                None => {
-                    stats.factorisations += 1;
-                    if work
-                        .cholesky
-                        .factorise(&layout.pattern, &work.values)
-                        .is_err()
-                    {
-                        break;
-                    }
-                    work.cholesky.solve(&mut pushed);
-                    pushed
-                }
-            };
-            newton_direction.get_or_insert_with(|| direction.clone());
-            direction = solved;
-        }
-        if let Some(newton) = newton_direction {
-            if slope_along(layout, &direction, &evaluation.residual) >= 0.0 {
-                direction = newton;
-            }
-        }
-        stats.solve_seconds += clock.elapsed().as_secs_f64();
-        // an increment that would be cut (stalled, or no step found) is solved if its
-        // positions are settled: the residual floors where nodes rest at the edge of a
-        // contact spring's reach
-        let settled = correction <= CORRECTION_TOLERANCE * layout.length_scale
-            && norm <= CORRECTION_RESIDUAL_SLACK * settings.tolerance * scale
-            && evaluation.tunnelled == 0;
-        let stalled = stalls(&residuals);
-        // backtracking: a step is taken when it lowers the incremental potential by a share of
-        // its slope (Armijo; on a positive definite tangent the direction always descends) or
-        // the residual norm, whichever first: the potential alone stops deciding near the
-        // solution, where its changes are at its rounding
-        let slope = slope_along(layout, &direction, &evaluation.residual);
-        // a force-driven tool moves at most a quarter of the contact's reach per step: its
-        // potential -F u falls without bound once it has passed through the blank
-        let tool_step = layout
-            .tool_unknown
-            .iter()
-            .flatten()
-            .map(|&u| direction[u].abs())
-            .fold(0.0, f64::max);
-        let reach = 0.25 * model.contact.max_penetration;
-        let mut alpha: f64 = if tool_step > reach {
-            reach / tool_step
-        } else {
-            1.0
-        };
-        let potential_decides =
-            -slope > POTENTIAL_ROUNDING * evaluation.potential.abs().max(f64::MIN_POSITIVE);
-        let mut accepted = false;
-        // the last probe's step and potential, for the interpolated steps after the halvings
-        let mut last_probe: Option<(f64, f64)> = None;
-        // a stalled increment takes no step: it is settled or cut
-        let attempts = if stalled {
-            0
-        } else {
-            LINE_SEARCH_HALVINGS + LINE_SEARCH_INTERPOLATIONS
-        };
-        for attempt in 0..attempts {
-            if attempt >= LINE_SEARCH_HALVINGS {
-                match last_probe
-                    .and_then(|(a, pi)| interpolated_step(a, pi - evaluation.potential, slope))
-                {
-                    Some(a) if potential_decides => alpha = a,
-                    _ => break,
-                }
-            }
-            let candidate: Vec<f64> = z
-                .iter()
-                .zip(&direction)
-                .map(|(z, d)| z + alpha * d)
-                .collect();
-            let (cx, ct) = configuration(layout, &candidate, &x, &translations);
-            let clock = Instant::now();
-            let trial = Trial {
-                positions: &cx,
-                translations: &ct,
-                engaged: frozen.as_deref(),
-                near: Some(work.near.lists()),
-            };
-            let probe = evaluator.residual(start, &trial);
-            stats.assembly_seconds += clock.elapsed().as_secs_f64();
-            if let Ok(probe) = probe {
-                let probe_norm = free_norm(layout, &probe.residual);
-                let lowers_potential =
-                    slope < 0.0 && probe.potential <= evaluation.potential + 1e-4 * alpha * slope;
-                let lowers_residual = probe_norm <= (1.0 - 1e-4 * alpha) * norm;
-                let lowers = if potential_decides {
-                    lowers_potential
-                } else {
-                    lowers_residual
-                };
-                if probe_norm.is_finite() && lowers {
-                    z = candidate;
-                    x = cx;
-                    translations = ct;
-                    carried = Some((probe, frozen.clone()));
-                    accepted = true;
-                    break;
-                }
-                last_probe = probe
-                    .potential
-                    .is_finite()
-                    .then_some((alpha, probe.potential));
-            }
-            alpha *= 0.5;
-        }
-        if !accepted {
-            // at the rounding floor no step lowers the residual: the increment is solved
-            let at_rounding = norm <= ROUNDING_FLOOR * scale
-                || correction <= CORRECTION_FLOOR * layout.length_scale;
-            if at_rounding && !stalled {
-                return Ok((evaluation, x, translations, iteration + 1));
-            }
-            if settled && frozen.is_none() {
-                return Ok((evaluation, x, translations, iteration + 1));
-            }
-            if settled {
-                if let Some(free) =
-                    on_free(&x, &translations, &evaluation, scale, stats, &residuals)?
-                {
-                    return Ok((free, x, translations, iteration + 1));
-                }
-            }
-            if stalled {
-                return Err(fail(
-                    residuals,
-                    Some(&evaluation),
-                    format!(
-                        "the residual fell by less than half over the last {STALL_WINDOW} \
-                         iterations"
-                    ),
-                ));
-            }
-            if !projected {
-                projected = true;
-                stats.projected += 1;
-                continue;
-            }
-            return Err(fail(
-                residuals,
-                Some(&evaluation),
-                "the line search found no step that lowers the residual".into(),
-            ));
-        }
-    }
-    Err(NotConverged {
-        worst_nodes: worst,
-        reason: format!("no convergence in {} iterations", settings.max_iterations),
-        residuals,
-    })
-}
-
-/// Times a correction is solved again with the contact springs it enters, at most.
-const ANTICIPATION_ROUNDS: usize = 3;
 
 /// Relative residual `|K d + r| / |r|` to which conjugate gradients solve for a Newton
 /// correction **(choice)**: Newton's method contracts only four to eight times per iteration
@@ -1123,234 +717,6 @@ const CG_TOLERANCE: f64 = 1e-2;
 /// the 5,041-cell hemisphere: about four a solve on average, 2,408 over 576 solves, growing
 /// with the number of cells across the part; a few solves a run do not converge within this).
 const CG_ITERATIONS: usize = 40;
-
-/// Times an increment's friction is lagged again with the normal forces it reaches, at most.
-const FRICTION_PASSES: usize = 2;
-
-/// How close to converged (a multiple of the tolerance) the residual must be before friction
-/// is lagged again with the normal forces reached: close enough that they are the increment's
-/// to within the lag's own change threshold, early enough that the iterations still to come
-/// converge the new problem (docs/solver.md, "Friction": 10 took an iteration more about every
-/// third increment, 1,000 more iterations again).
-const LAG_REFRESH_BAND: f64 = 100.0;
-
-/// Change of the friction limits `mu lambda`, relative to their sum, above which friction is
-/// lagged again with them and Newton's method goes on from there on the new problem.
-const FRICTION_LAG_CHANGE: f64 = 0.002;
-
-/// Iterations over which the residual must at least halve once the increment is this many
-/// iterations old: slower, the increment is cut at once rather than after its last
-/// iteration, as the shorter one converges in fewer iterations than the slow one would take.
-const STALL_WINDOW: usize = 5;
-const STALL_AFTER: usize = 10;
-
-fn stalls(residuals: &[f64]) -> bool {
-    let n = residuals.len();
-    n >= STALL_AFTER && residuals[n - 1] > 0.5 * residuals[n - 1 - STALL_WINDOW]
-}
-
-/// The expected change of the potential, relative to the potential, below which the line
-/// search judges a step by the residual instead: `Pi` sums terms whose rounding (about 1e-16
-/// of each) then hides the change of the sum.
-const POTENTIAL_ROUNDING: f64 = 1e-10;
-
-/// Halvings of the step the line search tries before it gives up.
-const LINE_SEARCH_HALVINGS: usize = 12;
-
-/// Steps the line search tries after its halvings, each the minimum of the parabola through
-/// the potential at the start (with its slope) and at the last step tried: where the tangent
-/// does not see a contact spring that the step runs into (a node resting at the edge of its
-/// reach), the potential rises along the Newton correction from a step far below the
-/// halvings' last (measured on 20,164 elements: 3e-5, the halvings ending at 2.4e-4).
-const LINE_SEARCH_INTERPOLATIONS: usize = 4;
-
-/// The minimum of the parabola `slope a + c a^2` through the change `rise` of the potential at
-/// the step `alpha`, kept within a tenth and a half of `alpha`; `None` where that is no
-/// parabola opening upwards from a descent.
-fn interpolated_step(alpha: f64, rise: f64, slope: f64) -> Option<f64> {
-    let curvature = (rise - slope * alpha) / (alpha * alpha);
-    (slope < 0.0 && curvature > 0.0)
-        .then(|| (-slope / (2.0 * curvature)).clamp(0.1 * alpha, 0.5 * alpha))
-}
-
-/// Newton iterations after which the contact set (which node–tool springs act) is frozen for
-/// the rest of the iterations, every so many again: a node whose equilibrium lies at the edge
-/// of contact otherwise hops in and out of it from one iteration to the next and the residual
-/// falls only slowly. Solved on the frozen set, the solution is checked on the free one.
-const FREEZE_AFTER: usize = 5;
-
-/// A residual, relative to the forces at play, that no step lowers is taken as converged below
-/// this: the rounding of sums of forces up to a million times larger than the residual.
-const ROUNDING_FLOOR: f64 = 1e-9;
-
-/// A Newton correction, relative to the mean element size, at the rounding of the positions:
-/// where no step lowers the residual and the full step would move no unknown farther, the
-/// residual is what the forces' rounding leaves (stiff yarns over a slack sheet, forces of
-/// 1e-6 N at the start of a virtual test) and the increment is solved.
-const CORRECTION_FLOOR: f64 = 1e-9;
-
-/// A full Newton correction, relative to the mean element size, below which an increment is
-/// solved although its residual is above the tolerance, if within [`CORRECTION_RESIDUAL_SLACK`]
-/// times it **(choice)**: where the forces at play are a thousandth of a newton (a flange that
-/// only touches the die, no holder) the residual's tolerance asks for less than a micronewton,
-/// which nodes at the edge of a contact spring's reach never give, while their positions are
-/// settled to a millionth of the cells.
-const CORRECTION_TOLERANCE: f64 = 1e-5;
-const CORRECTION_RESIDUAL_SLACK: f64 = 100.0;
-
-/// A solution on the frozen contact set, `frozen` its evaluation, taken on the free set: the
-/// evaluation there when its residual is within `tolerance` (N), or when the springs the
-/// frozen set held on pull no node from farther than [`CORRECTION_TOLERANCE`] of the cells
-/// beyond their reach (then they only tell which side of the reach's edge a node at it lies,
-/// to within what the positions are settled to); `None` otherwise.
-fn on_free_set(
-    evaluator: &Evaluator,
-    start: &IncrementStart,
-    (x, translations): (&[Vector3<f64>], &[Vector3<f64>]),
-    frozen: &Evaluation,
-    tolerance: f64,
-    stats: &mut ImplicitStatistics,
-) -> Result<Option<Evaluation>, (usize, crate::material::MaterialError)> {
-    let layout = evaluator.layout;
-    let free = Trial {
-        positions: x,
-        translations,
-        engaged: None,
-        near: None,
-    };
-    let clock = Instant::now();
-    let unfrozen = evaluator.evaluate(start, &free, Tangent::None)?;
-    stats.assembly_seconds += clock.elapsed().as_secs_f64();
-    let pull = frozen
-        .contacts
-        .iter()
-        .zip(&layout.penalty)
-        .flat_map(|(c, k)| c.normal_force.iter().map(move |f| -f / k))
-        .fold(0.0, f64::max);
-    let settled = pull <= CORRECTION_TOLERANCE * layout.length_scale;
-    Ok((settled || free_norm(layout, &unfrozen.residual) <= tolerance).then_some(unfrozen))
-}
-
-/// Which node–tool springs act in `evaluation` (`[node][tool]`): the contact set Newton's
-/// method freezes.
-fn active_set(evaluation: &Evaluation) -> Vec<Vec<bool>> {
-    evaluation
-        .contacts
-        .iter()
-        .map(|c| c.normal_force.iter().map(|&f| f != 0.0).collect())
-        .collect()
-}
-
-/// `dPi/dalpha` along `direction` at `alpha = 0`: the free unknowns' `direction . residual`.
-fn slope_along(layout: &Layout, direction: &[f64], residual: &[f64]) -> f64 {
-    direction
-        .iter()
-        .zip(residual)
-        .zip(&layout.held)
-        .filter(|(_, &h)| !h)
-        .map(|((d, r), _)| d * r)
-        .sum()
-}
-
-/// The largest free component of `v`.
-fn largest_free(layout: &Layout, v: &[f64]) -> f64 {
-    v.iter()
-        .zip(&layout.held)
-        .filter(|(_, &h)| !h)
-        .map(|(d, _)| d.abs())
-        .fold(0.0, f64::max)
-}
-
-/// The unknowns of a configuration: node coordinates, then the tools' travel.
-fn unknowns(layout: &Layout, x: &[Vector3<f64>], translations: &[Vector3<f64>]) -> Vec<f64> {
-    let mut z: Vec<f64> = x.iter().flat_map(|p| [p.x, p.y, p.z]).collect();
-    z.resize(layout.size, 0.0);
-    for (k, unknown) in layout.tool_unknown.iter().enumerate() {
-        if let (Some(u), Some((axis, _))) = (unknown, layout.tool_force[k]) {
-            z[*u] = translations[k].dot(&axis);
-        }
-    }
-    z
-}
-
-/// Node positions and tool translations from the unknowns; held coordinates and the other
-/// tools stay where `x` and `translations` have them.
-fn configuration(
-    layout: &Layout,
-    z: &[f64],
-    x: &[Vector3<f64>],
-    translations: &[Vector3<f64>],
-) -> (Vec<Vector3<f64>>, Vec<Vector3<f64>>) {
-    let positions = x
-        .iter()
-        .enumerate()
-        .map(|(n, p)| {
-            Vector3::from_fn(|d, _| {
-                if layout.held[3 * n + d] {
-                    p[d]
-                } else {
-                    z[3 * n + d]
-                }
-            })
-        })
-        .collect();
-    let moved = translations
-        .iter()
-        .enumerate()
-        .map(
-            |(k, t)| match (layout.tool_unknown[k], layout.tool_force[k]) {
-                (Some(u), Some((axis, _))) => t + axis * (z[u] - t.dot(&axis)),
-                _ => *t,
-            },
-        )
-        .collect();
-    (positions, moved)
-}
-
-fn free_norm(layout: &Layout, residual: &[f64]) -> f64 {
-    residual
-        .iter()
-        .zip(&layout.held)
-        .filter(|(_, &h)| !h)
-        .map(|(r, _)| r * r)
-        .sum::<f64>()
-        .sqrt()
-}
-
-/// The size of the forces at play: internal, contact and applied (N).
-fn force_scale(layout: &Layout, e: &Evaluation) -> f64 {
-    let internal: f64 = e.internal.iter().map(|f| f.norm_squared()).sum();
-    let contact: f64 = e.contacts.iter().map(|c| c.force.norm_squared()).sum();
-    let applied: f64 = layout.tool_force.iter().flatten().map(|(_, f)| f * f).sum();
-    (internal + contact + applied).sqrt().max(1e-9)
-}
-
-fn shift_diagonal(layout: &Layout, values: &mut [f64], shift: f64) {
-    let diagonal: Vec<usize> = (0..layout.size)
-        .map(|i| layout.pattern.place(i, i).expect("diagonal"))
-        .collect();
-    let mean = diagonal.iter().map(|&p| values[p].abs()).sum::<f64>() / layout.size as f64;
-    for (i, &p) in diagonal.iter().enumerate() {
-        if !layout.held[i] {
-            values[p] += shift * mean;
-        }
-    }
-}
-
-/// The five nodes with the largest residual force.
-fn worst_nodes(layout: &Layout, residual: &[f64]) -> Vec<usize> {
-    let mut nodes: Vec<(usize, f64)> = (0..layout.nodes)
-        .map(|n| {
-            let r: f64 = (0..3)
-                .filter(|d| !layout.held[3 * n + d])
-                .map(|d| residual[3 * n + d].powi(2))
-                .sum();
-            (n, r)
-        })
-        .collect();
-    nodes.sort_by(|a, b| b.1.total_cmp(&a.1));
-    nodes.into_iter().take(5).map(|(n, _)| n).collect()
-}
 
 /// Takes the converged increment into the state: positions, forces, contact, tools, energies
 /// (trapezoidal work sums as in the explicit solver), and the friction lagged for the next.
@@ -1452,32 +818,4 @@ fn check_settings(s: &ImplicitSettings) -> Result<(), SolverError> {
         ));
     }
     Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::interpolated_step;
-
-    /// Along a Newton correction the potential is `slope a + c a^2` where the tangent misses a
-    /// stiffness the step runs into: the interpolated step is that parabola's minimum, from any
-    /// step tried, kept within a tenth and a half of it.
-    #[test]
-    fn the_interpolated_step_is_the_minimum_of_the_parabola() {
-        let (slope, c) = (-2.5e-4, 4.0);
-        let minimum = -slope / (2.0 * c);
-        let rise = |a: f64| slope * a + c * a * a;
-        for alpha in [4.0 * minimum, 9.0 * minimum] {
-            let step = interpolated_step(alpha, rise(alpha), slope).unwrap();
-            assert!(
-                (step - minimum).abs() < 1e-12 * minimum,
-                "{step} against {minimum}"
-            );
-        }
-        let far = 1e3 * minimum;
-        assert_eq!(interpolated_step(far, rise(far), slope), Some(0.1 * far));
-        let near = 1.2 * minimum;
-        assert_eq!(interpolated_step(near, rise(near), slope), Some(0.5 * near));
-        assert_eq!(interpolated_step(1.0, -1.0, 2.0), None, "no descent");
-        assert_eq!(interpolated_step(1.0, -1.0, -0.5), None, "no minimum");
-    }
 }
