@@ -1,6 +1,7 @@
 //! Rigid tools and their contact with the blank (docs/model.md §6): triangulated surfaces, the
 //! standard tool shapes, and penalty contact with Coulomb friction.
 
+pub mod blended_surface;
 pub mod penalty;
 pub mod potential;
 pub mod rigid_tool;
@@ -9,6 +10,7 @@ pub mod surface;
 pub mod swept_profile;
 pub mod tools;
 
+pub use blended_surface::{BlendedDistance, BlendedSurface};
 pub use penalty::{ContactSettings, NodeContact, ToolLoad};
 pub use rigid_tool::{NearTriangles, RigidTool, ToolMotion};
 pub use stl::{parse_stl, read_stl, write_stl_ascii, write_stl_binary, StlError};

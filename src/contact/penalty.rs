@@ -202,7 +202,8 @@ fn node_tool_force(
     let local = node.position - translation;
     let gap = tool.nearest_listed(&local, &mut contact.near[k]).map(|p| {
         let (normal, distance) = p.direction_to(&local);
-        (normal, distance - settings.offset)
+        // unit: a blended surface's is its distance's gradient, nearly so
+        (normal.normalize(), distance - settings.offset)
     });
     let (normal, gap) = match gap {
         Some((n, g)) if g < 0.0 && g > -settings.max_penetration => (n, g),

@@ -120,7 +120,7 @@ pub fn pair_contact(
     if let (Some((energy, gradient, n, force, curvature)), Some(p)) = (normal, nearest) {
         pair.energy = energy;
         pair.gradient = gradient;
-        pair.normal = n;
+        pair.normal = n.normalize();
         pair.normal_force = force;
         pair.hessian = match hessian {
             PairHessian::None => Matrix3::zeros(),
@@ -419,6 +419,49 @@ mod tests {
                 )
                 .unwrap()
             };
+            assert_derivatives(k, y, at);
+        }
+    }
+
+    /// The same on the surfaces blended over a die's facets (docs/model.md §6, "Blended tool
+    /// surfaces"): over its plate, fillet and wall, with friction.
+    #[test]
+    fn on_blended_surfaces_gradient_and_hessian_are_the_derivatives_of_the_potential() {
+        let die = crate::contact::hemisphere_die(12.0, 5.0, 40.0, 20.0, 1.5).unwrap();
+        let tool = RigidTool::new("die", die, ToolMotion::Fixed, 0.3, 1.0)
+            .unwrap()
+            .with_blended_surface();
+        for (k, y) in [
+            Vector3::new(25.0, 3.0, -0.15),
+            Vector3::new(14.1, 1.3, 1.2),
+            Vector3::new(-10.0, 7.3, 3.1),
+            Vector3::new(0.4, -11.85, 9.0),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let lag = FrictionLag {
+                limit: 3.0,
+                normal: tool.nearest(&y).unwrap().normal.normalize(),
+                start: y + Vector3::new(0.02, -0.01, 0.0),
+                carried: Vector3::new(0.5, 1.0, -0.3),
+            };
+            let at = |z: Vector3<f64>| {
+                pair_contact(
+                    &tool,
+                    &z,
+                    tool.nearest(&z),
+                    500.0,
+                    &SETTINGS,
+                    Some(&lag),
+                    options(0.01, PairHessian::Exact),
+                )
+                .unwrap()
+            };
+            assert!(matches!(
+                tool.nearest(&y).unwrap().on,
+                Footing::Smooth { .. }
+            ));
             assert_derivatives(k, y, at);
         }
     }

@@ -7,6 +7,7 @@
 //! `margin` from there, no other triangle can come within the search radius, and a step reads
 //! the list instead of the grid.
 
+use super::blended_surface::BlendedSurface;
 use super::penalty::ToolLoad;
 use super::surface::{
     closest_feature_on_triangle, closest_point_on_triangle, Feature, Footing, Projection,
@@ -61,6 +62,9 @@ pub struct RigidTool {
     /// The exact surface the triangles approximate, where it is known (the built-in tools):
     /// contact then projects onto it; the triangles bound the tool for the run's checks.
     exact: Option<SweptProfile>,
+    /// The smooth surface blended over the triangles, for a tool without an exact one (read
+    /// from a file): contact then sees it instead of the facets (see [`super::blended_surface`]).
+    blend: Option<BlendedSurface>,
     search_radius: f64,
     grid: SurfaceGrid,
     /// Centre and radius of a sphere around each triangle, for the full search of [`Self::gap`].
@@ -98,7 +102,7 @@ impl RigidTool {
                 return Err(format!("tool '{name}': mass = {mass} must be > 0"));
             }
         }
-        let grid = SurfaceGrid::new(&surface, search_radius + list_margin(search_radius));
+        let grid = SurfaceGrid::new(&surface, reach(&search_radius, None));
         let spheres = surface
             .triangles
             .iter()
@@ -118,6 +122,7 @@ impl RigidTool {
             motion,
             friction,
             exact: None,
+            blend: None,
             search_radius,
             grid,
             spheres,
@@ -129,6 +134,27 @@ impl RigidTool {
     pub fn with_exact_surface(mut self, exact: SweptProfile) -> Self {
         self.exact = Some(exact);
         self
+    }
+
+    /// The tool whose contact sees the smooth surface blended over its triangles
+    /// ([`super::blended_surface`]) instead of the bare facets, whose normal jumps at their
+    /// edges.
+    pub fn with_blended_surface(mut self) -> Self {
+        let blend = BlendedSurface::new(&self.surface, self.search_radius);
+        self.grid = SurfaceGrid::new(&self.surface, reach(&self.search_radius, Some(&blend)));
+        self.blend = Some(blend);
+        self
+    }
+
+    /// The blended surface, where the tool has one.
+    pub fn blended_surface(&self) -> Option<&BlendedSurface> {
+        self.blend.as_ref()
+    }
+
+    /// How far from a node the triangles it needs lie: the search radius, or the blend's
+    /// support where that is longer.
+    fn reach(&self) -> f64 {
+        reach(&self.search_radius, self.blend.as_ref())
     }
 
     /// The exact surface, where the tool has one.
@@ -146,6 +172,25 @@ impl RigidTool {
                 normal: foot.normal,
                 on: Footing::Smooth { turn: foot.turn },
             }),
+        )
+    }
+
+    /// The blended surface's point for `y` from the `triangles` near it, when the tool has a
+    /// blend ([`super::blended_surface`]): `Some(None)` when `y` is farther from it than the
+    /// search radius. The projection carries the blend's value, gradient and Hessian so that
+    /// [`Projection::direction_to`] gives `(grad phi, phi)` at `y` and its turn is `hess phi`:
+    /// `point = y - phi grad phi / |grad phi|^2`, `normal = grad phi` (nearly unit).
+    fn blended_nearest(&self, p: &Vector3<f64>, triangles: &[usize]) -> Option<Option<Projection>> {
+        let blend = self.blend.as_ref()?;
+        let field = blend.distance(&self.surface, triangles, p);
+        Some(
+            field
+                .filter(|f| f.value.abs() <= self.search_radius)
+                .map(|f| Projection {
+                    point: p - f.gradient * (f.value / f.gradient.norm_squared()),
+                    normal: f.gradient,
+                    on: Footing::Smooth { turn: f.hessian },
+                }),
         )
     }
 
@@ -174,7 +219,11 @@ impl RigidTool {
         if let Some(exact) = self.exact_nearest(p) {
             return exact;
         }
-        self.nearest_among(p, self.grid.candidates(p).map_or(&[], Vec::as_slice))
+        let candidates = self.grid.candidates(p).map_or(&[][..], Vec::as_slice);
+        if let Some(blended) = self.blended_nearest(p, candidates) {
+            return blended;
+        }
+        self.nearest_among(p, candidates)
     }
 
     /// [`Self::nearest`] for a node that keeps its list of near triangles between calls: the
@@ -184,6 +233,9 @@ impl RigidTool {
             return exact;
         }
         self.refresh_near_list(p, near);
+        if let Some(blended) = self.blended_nearest(p, &near.triangles) {
+            return blended;
+        }
         self.nearest_among(p, &near.triangles)
     }
 
@@ -196,9 +248,9 @@ impl RigidTool {
         }
         let margin = list_margin(self.search_radius);
         match near.anchor {
-            Some(a) if (p - a).norm_squared() < margin * margin => {
-                self.nearest_among(p, &near.triangles)
-            }
+            Some(a) if (p - a).norm_squared() < margin * margin => self
+                .blended_nearest(p, &near.triangles)
+                .unwrap_or_else(|| self.nearest_among(p, &near.triangles)),
             _ => self.nearest(p),
         }
     }
@@ -217,7 +269,7 @@ impl RigidTool {
     }
 
     fn list_near_triangles(&self, p: &Vector3<f64>, near: &mut NearTriangles) {
-        let reach = self.search_radius + list_margin(self.search_radius);
+        let reach = self.reach();
         near.anchor = Some(*p);
         near.triangles.clear();
         if let Some(candidates) = self.grid.candidates(p) {
@@ -257,6 +309,14 @@ impl RigidTool {
     }
 }
 
+/// How far from a node the triangles of a list or a grid cell reach: the search radius (or
+/// the blend's support, where that is longer) and the margin a node may move before its list
+/// is made again.
+fn reach(search_radius: &f64, blend: Option<&BlendedSurface>) -> f64 {
+    let needed = blend.map_or(*search_radius, |b| b.support().max(*search_radius));
+    needed + list_margin(*search_radius)
+}
+
 /// How far (mm) a node may move relative to a tool before its list of near triangles is made
 /// again: the search radius itself **(choice)**. A larger margin lists more triangles, a smaller
 /// one lists them more often; both are cheap next to a grid lookup every step.
@@ -286,6 +346,14 @@ impl RigidTool {
         if let Some(near) = self.nearest(p) {
             return near.direction_to(p).1 - offset;
         }
+        // beyond the search radius, the blend where a facet is within its support (the
+        // grid lists those), the nearest facet beyond that
+        if let Some(Some(far)) = self.blend.as_ref().map(|b| {
+            let candidates = self.grid.candidates(p).map_or(&[][..], Vec::as_slice);
+            b.distance(&self.surface, candidates, p)
+        }) {
+            return far.value - offset;
+        }
         // a triangle whose bounding sphere is farther than the best so far cannot be nearer
         let mut best: Option<(usize, Vector3<f64>, f64)> = None;
         for (k, (centre, radius)) in self.spheres.iter().enumerate() {
@@ -300,6 +368,10 @@ impl RigidTool {
             }
         }
         best.map_or(f64::INFINITY, |(k, q, _)| {
+            if let Some(blend) = &self.blend {
+                // as the blend's facets are: beside an open edge, not behind it
+                return blend.facet_distance(&self.surface, k, p, &q).0 - offset;
+            }
             let nearest = Projection {
                 point: q,
                 normal: self.surface.normal(k),

@@ -16,20 +16,23 @@ pub struct TriangleSurface {
 pub struct Projection {
     /// The nearest point.
     pub point: Vector3<f64>,
-    /// Unit normal there, towards the blank's side: the facet's on a triangulated surface.
+    /// Normal there, towards the blank's side: the facet's on a triangulated surface, unit;
+    /// on a blended surface ([`super::blended_surface`]) the gradient of its distance, within
+    /// a few per cent of unit, so that the contact's potential has the force it gives.
     pub normal: Vector3<f64>,
     /// What the nearest point lies on.
     pub on: Footing,
 }
 
-/// What a [`Projection`]'s point lies on: a facet of a triangulated surface, or a tool's exact
-/// smooth surface ([`super::swept_profile`]).
+/// What a [`Projection`]'s point lies on: a facet of a triangulated surface, or a smooth
+/// surface: a tool's exact one ([`super::swept_profile`]) or one blended over its facets
+/// ([`super::blended_surface`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Footing {
     /// Triangle `k` of the surface.
     Facet(usize),
-    /// The exact surface, where the normal is the direction from the point to the query and
-    /// `turn` is its derivative with respect to the query.
+    /// A smooth surface, where the distance is `(x - point) . normal` and `turn` is the
+    /// normal's derivative with respect to the query.
     Smooth { turn: Matrix3<f64> },
 }
 

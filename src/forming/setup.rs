@@ -473,7 +473,7 @@ fn punch_and_die(
         let tool = RigidTool::new(name, surface, motion, friction, thickness)?;
         Ok::<_, String>(match exact {
             Some(exact) => tool.with_exact_surface(exact),
-            None => tool,
+            None => tool.with_blended_surface(),
         })
     };
     Ok(vec![
@@ -512,7 +512,8 @@ fn shifted(surface: TriangleSurface, dz: f64) -> TriangleSurface {
 
 /// Tools read from files, each checked for coherent normals and turned to face the blank
 /// (the punch and holder from below, the die from above); a holder fixed at a gap is moved
-/// down by it. What was noticed goes to `notes`.
+/// down by it. Their contact sees the smooth surfaces blended over their facets
+/// (docs/model.md §6, "Blended tool surfaces"). What was noticed goes to `notes`.
 fn file_tool_set(
     s: &Scenario,
     f: &ToolFiles,
@@ -542,13 +543,16 @@ fn file_tool_set(
         return Ok((tools, None));
     };
     let holder_surface = shifted(tool_surface("holder", holder, &up, notes)?, -gap);
-    tools.push(RigidTool::new(
-        "blank holder",
-        holder_surface,
-        motion,
-        s.process.friction.holder,
-        thickness,
-    )?);
+    tools.push(
+        RigidTool::new(
+            "blank holder",
+            holder_surface,
+            motion,
+            s.process.friction.holder,
+            thickness,
+        )?
+        .with_blended_surface(),
+    );
     Ok((tools, Some(2)))
 }
 

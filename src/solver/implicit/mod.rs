@@ -701,8 +701,9 @@ fn increment(
 
 /// The tool's normal at a node at `y` (relative to the tool) that friction is lagged with.
 fn lag_normal(tool: &RigidTool, y: &Vector3<f64>) -> Vector3<f64> {
+    // unit: a blended surface's normal is its distance's gradient, nearly so
     tool.nearest(y)
-        .map_or(Vector3::z(), |p| p.direction_to(y).0)
+        .map_or(Vector3::z(), |p| p.direction_to(y).0.normalize())
 }
 
 /// Relative residual `|K d + r| / |r|` to which conjugate gradients solve for a Newton
