@@ -480,7 +480,7 @@ mod tests {
     use super::*;
     use crate::contact::{
         double_dome_die, double_dome_die_shape, double_dome_punch, double_dome_punch_shape,
-        hemisphere_die, hemisphere_punch, DieShape, ProfilePiece,
+        hemisphere_die, hemisphere_punch, DieShape,
     };
     use std::f64::consts::PI;
 
@@ -636,7 +636,7 @@ mod tests {
                 let to = if index + 1 == pieces { 0.5 } else { 1.0 };
                 for i in 0..=400 {
                     let f = from + (to - from) * i as f64 / 400.0;
-                    let [r, z] = on_piece(piece, f);
+                    let [r, z] = piece.point_at(f);
                     let around = 2.0 * PI * (i as f64 * 0.618_034).fract();
                     let rough = Vector3::new(r * around.cos(), r * around.sin(), z);
                     let foot = exact.nearest(&rough);
@@ -746,25 +746,6 @@ mod tests {
         }
     }
 
-    /// The point of a profile piece at the fraction `f` of its length.
-    fn on_piece(piece: &ProfilePiece, f: f64) -> [f64; 2] {
-        match *piece {
-            ProfilePiece::Line { from, to } => [
-                from[0] + f * (to[0] - from[0]),
-                from[1] + f * (to[1] - from[1]),
-            ],
-            ProfilePiece::Arc {
-                centre,
-                radius,
-                from,
-                to,
-            } => {
-                let a = from + f * (to - from);
-                [centre[0] + radius * a.cos(), centre[1] + radius * a.sin()]
-            }
-        }
-    }
-
     fn longest_edge(surface: &TriangleSurface) -> f64 {
         surface
             .triangles
@@ -777,14 +758,7 @@ mod tests {
 
     /// The largest angle between the normals of two facets sharing an edge.
     fn largest_crease(surface: &TriangleSurface) -> f64 {
-        let mut sharing: HashMap<[usize; 2], Vec<usize>> = HashMap::new();
-        for (k, t) in surface.triangles.iter().enumerate() {
-            for e in 0..3 {
-                let (i, j) = (t[e], t[(e + 1) % 3]);
-                sharing.entry([i.min(j), i.max(j)]).or_default().push(k);
-            }
-        }
-        sharing
+        shared_edges(surface)
             .values()
             .filter(|f| f.len() == 2)
             .map(|f| {

@@ -27,6 +27,25 @@ pub enum ProfilePiece {
     },
 }
 
+impl ProfilePiece {
+    /// The point `(r, z)` at the fraction `f` of the piece (of its length along a line, of its
+    /// angle along an arc).
+    pub fn point_at(&self, f: f64) -> [f64; 2] {
+        match *self {
+            ProfilePiece::Line { from, to } => [
+                from[0] + f * (to[0] - from[0]),
+                from[1] + f * (to[1] - from[1]),
+            ],
+            ProfilePiece::Arc {
+                centre,
+                radius,
+                from,
+                to,
+            } => on_circle(centre, radius, from + f * (to - from)),
+        }
+    }
+}
+
 /// The point of a smooth surface nearest to a query, with what the contact needs of it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SurfacePoint {
@@ -481,18 +500,7 @@ mod tests {
         for piece in shape.pieces() {
             for i in 0..=2000 {
                 let f = i as f64 / 2000.0;
-                let [r, z] = match *piece {
-                    ProfilePiece::Line { from, to } => [
-                        from[0] + f * (to[0] - from[0]),
-                        from[1] + f * (to[1] - from[1]),
-                    ],
-                    ProfilePiece::Arc {
-                        centre,
-                        radius,
-                        from,
-                        to,
-                    } => on_circle(centre, radius, from + f * (to - from)),
-                };
+                let [r, z] = piece.point_at(f);
                 for j in 0..=200 {
                     let a = -FRAC_PI_2 + PI * j as f64 / 200.0;
                     let p = Vector3::new(8.0 + r * a.cos(), r * a.sin(), z);
