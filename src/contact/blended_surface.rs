@@ -31,8 +31,8 @@ use super::surface::{closest_feature_on_triangle, Feature, TriangleSurface};
 use nalgebra::{Matrix2, Matrix2x3, Matrix3, Vector2, Vector3};
 use std::collections::HashMap;
 
-/// The blend of a triangulated surface's planes: the support `h` and the open edges of each
-/// facet; the facets stay with the tool.
+/// The blend of a triangulated surface's patches: the support `h`, the open edges and the
+/// curved patch of each facet; the facets stay with the tool.
 #[derive(Clone, Debug, PartialEq)]
 pub struct BlendedSurface {
     support: f64,
@@ -51,6 +51,7 @@ pub struct BlendedSurface {
 /// ([`corner_normals`]). A flat face's facets get `s = 0`, their plane.
 #[derive(Clone, Debug, PartialEq)]
 struct Patch {
+    normal: Vector3<f64>,
     origin: Vector3<f64>,
     axes: Matrix2x3<f64>,
     lift: f64,
@@ -87,14 +88,26 @@ impl BlendedSurface {
     /// least `least` (mm; a tool's search radius, so that every point the contact looks at has
     /// a facet within the support).
     pub fn new(surface: &TriangleSurface, least: f64) -> Self {
-        Self::with_support(surface, crease_spacing(surface).unwrap_or(least).max(least))
+        let surface = &welded(surface);
+        let edges = shared_edges(surface);
+        let support = crease_spacing(surface, &edges).unwrap_or(least).max(least);
+        Self::over(surface, edges, support)
     }
 
     /// The blend over `surface` with the given support `h` (mm).
     pub fn with_support(surface: &TriangleSurface, support: f64) -> Self {
         let surface = &welded(surface);
+        Self::over(surface, shared_edges(surface), support)
+    }
+
+    /// The blend over a [`welded`] surface whose edges are `edges` ([`shared_edges`]).
+    fn over(
+        surface: &TriangleSurface,
+        edges: HashMap<[usize; 2], Vec<usize>>,
+        support: f64,
+    ) -> Self {
         let mut open_edges = vec![Vec::new(); surface.triangles.len()];
-        let mut edges: Vec<_> = shared_edges(surface).into_iter().collect();
+        let mut edges: Vec<_> = edges.into_iter().collect();
         // in a fixed order, whatever the map's
         edges.sort_unstable_by_key(|e| e.0);
         for ([i, j], facets) in edges {
@@ -122,7 +135,7 @@ impl BlendedSurface {
         }
     }
 
-    /// `h` (mm): how far from a facet its plane still counts.
+    /// `h` (mm): how far from a facet its patch still counts.
     pub fn support(&self) -> f64 {
         self.support
     }
@@ -137,7 +150,7 @@ impl BlendedSurface {
         y: &Vector3<f64>,
     ) -> Option<BlendedDistance> {
         let h2 = self.support * self.support;
-        // sums of w, of w f, and their gradients and Hessians
+        // sums of w, of w q, and their gradients and Hessians
         let (mut s, mut ds, mut hs) = (0.0, Vector3::zeros(), Matrix3::zeros());
         let (mut f, mut df, mut hf) = (0.0, Vector3::zeros(), Matrix3::zeros());
         for &k in triangles {
@@ -147,19 +160,18 @@ impl BlendedSurface {
             if r >= 1.0 {
                 continue;
             }
-            let n = (b - a).cross(&(c - a)).normalize();
             let (w, dw, hw) = weight(
                 r,
                 &((y - p) * (2.0 / h2)),
-                &(feature_hessian(feature, &n) / h2),
+                &(feature_hessian(feature, &self.patches[k].normal) / h2),
             );
-            let (plane, dplane, hplane) = self.facet_distance(surface, k, y, &p);
+            let (q, dq, hq) = self.facet_distance(k, y, &p);
             s += w;
             ds += dw;
             hs += hw;
-            f += w * plane;
-            df += dw * plane + dplane * w;
-            hf += hw * plane + dw * dplane.transpose() + dplane * dw.transpose() + hplane * w;
+            f += w * q;
+            df += dw * q + dq * w;
+            hf += hw * q + dw * dq.transpose() + dq * dw.transpose() + hq * w;
         }
         if s <= 0.0 {
             return None;
@@ -187,12 +199,11 @@ impl BlendedSurface {
     /// the holder, not inside it.
     pub fn facet_distance(
         &self,
-        surface: &TriangleSurface,
         k: usize,
         y: &Vector3<f64>,
         p: &Vector3<f64>,
     ) -> (f64, Vector3<f64>, Matrix3<f64>) {
-        let (q, dq, hq) = self.patches[k].distance(&surface.normal(k), y);
+        let (q, dq, hq) = self.patches[k].distance(y);
         let on_edge = |(e, m): &&(Vector3<f64>, Vector3<f64>)| {
             m.dot(&(p - e)) >= -ON_EDGE * (1.0 + (p - e).norm())
         };
@@ -259,6 +270,7 @@ impl Patch {
             .solve(&heights)
             .map_or([0.0; 3], Into::into);
         Self {
+            normal: n,
             origin,
             axes,
             lift,
@@ -269,7 +281,8 @@ impl Patch {
 
     /// The height of `y` above the patch along the facet's normal `n`, `n . (y - o) - s(u)`,
     /// with its gradient `n - A^T (slope + K u)` and Hessian `-A^T K A` (`A` the axes).
-    fn distance(&self, n: &Vector3<f64>, y: &Vector3<f64>) -> (f64, Vector3<f64>, Matrix3<f64>) {
+    fn distance(&self, y: &Vector3<f64>) -> (f64, Vector3<f64>, Matrix3<f64>) {
+        let n = &self.normal;
         let r = y - self.origin;
         let u = self.axes * r;
         let slope = self.slope + self.curvature * u;
@@ -440,9 +453,11 @@ fn feature_hessian(feature: Feature, n: &Vector3<f64>) -> Matrix3<f64> {
 /// approximates does; a support as long as the long thin facets of a flat face beside a
 /// fillet would round the fillet's neighbourhood far more. `None` where the surface has no
 /// such crease (flat, or only sharp edges).
-pub fn crease_spacing(surface: &TriangleSurface) -> Option<f64> {
-    let surface = &welded(surface);
-    let mut spacings: Vec<f64> = shared_edges(surface)
+fn crease_spacing(
+    surface: &TriangleSurface,
+    edges: &HashMap<[usize; 2], Vec<usize>>,
+) -> Option<f64> {
+    let mut spacings: Vec<f64> = edges
         .iter()
         .filter_map(|(&[i, j], facets)| {
             let &[k, l] = facets.as_slice() else {

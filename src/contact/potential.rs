@@ -272,6 +272,32 @@ mod tests {
         }
     }
 
+    /// The pair at `z` on `tool` with friction lagged as `lag`, its regularising slip `slip`,
+    /// and the exact Hessian.
+    fn exact_pair(tool: &RigidTool, z: Vector3<f64>, lag: &FrictionLag, slip: f64) -> PairContact {
+        pair_contact(
+            tool,
+            &z,
+            tool.nearest(&z),
+            500.0,
+            &SETTINGS,
+            Some(lag),
+            options(slip, PairHessian::Exact),
+        )
+        .unwrap()
+    }
+
+    /// Friction lagged at `y` in front of `tool`: the tangent plane of its nearest point there,
+    /// a start beside `y` and a carried force, with a limit of 3 N.
+    fn lag_in_front(tool: &RigidTool, y: Vector3<f64>) -> FrictionLag {
+        FrictionLag {
+            limit: 3.0,
+            normal: tool.nearest(&y).unwrap().normal.normalize(),
+            start: y + Vector3::new(0.02, -0.01, 0.0),
+            carried: Vector3::new(0.5, 1.0, -0.3),
+        }
+    }
+
     const SETTINGS: ContactSettings = ContactSettings {
         offset: 0.25,
         penalty_scale: 0.1,
@@ -334,18 +360,7 @@ mod tests {
                 .flat_map(|e| carried.map(|c| (e, c)))
             {
                 let lag = FrictionLag { carried, ..lag };
-                let at = |z: Vector3<f64>| {
-                    pair_contact(
-                        &tool,
-                        &z,
-                        tool.nearest(&z),
-                        500.0,
-                        &SETTINGS,
-                        Some(&lag),
-                        options(eps, PairHessian::Exact),
-                    )
-                    .unwrap()
-                };
+                let at = |z: Vector3<f64>| exact_pair(&tool, z, &lag, eps);
                 let force = at(y).tangential.norm();
                 assert_eq!(force >= lag.limit * (1.0 - 1e-12), eps < 1.0, "{k} {eps}");
                 assert_derivatives(k, y, at);
@@ -401,24 +416,8 @@ mod tests {
             // 0.15 mm in front of the surface: inside the spring's reach
             let foot = tool.exact_surface().unwrap().nearest(&rough);
             let y = foot.point + foot.normal * 0.15;
-            let lag = FrictionLag {
-                limit: 3.0,
-                normal: tool.nearest(&y).unwrap().normal,
-                start: y + Vector3::new(0.02, -0.01, 0.0),
-                carried: Vector3::new(0.5, 1.0, -0.3),
-            };
-            let at = |z: Vector3<f64>| {
-                pair_contact(
-                    tool,
-                    &z,
-                    tool.nearest(&z),
-                    500.0,
-                    &SETTINGS,
-                    Some(&lag),
-                    options(0.01, PairHessian::Exact),
-                )
-                .unwrap()
-            };
+            let lag = lag_in_front(tool, y);
+            let at = |z: Vector3<f64>| exact_pair(tool, z, &lag, 0.01);
             assert_derivatives(k, y, at);
         }
     }
@@ -440,24 +439,8 @@ mod tests {
         .into_iter()
         .enumerate()
         {
-            let lag = FrictionLag {
-                limit: 3.0,
-                normal: tool.nearest(&y).unwrap().normal.normalize(),
-                start: y + Vector3::new(0.02, -0.01, 0.0),
-                carried: Vector3::new(0.5, 1.0, -0.3),
-            };
-            let at = |z: Vector3<f64>| {
-                pair_contact(
-                    &tool,
-                    &z,
-                    tool.nearest(&z),
-                    500.0,
-                    &SETTINGS,
-                    Some(&lag),
-                    options(0.01, PairHessian::Exact),
-                )
-                .unwrap()
-            };
+            let lag = lag_in_front(&tool, y);
+            let at = |z: Vector3<f64>| exact_pair(&tool, z, &lag, 0.01);
             assert!(matches!(
                 tool.nearest(&y).unwrap().on,
                 Footing::Smooth { .. }

@@ -370,7 +370,7 @@ impl RigidTool {
         best.map_or(f64::INFINITY, |(k, q, _)| {
             if let Some(blend) = &self.blend {
                 // as the blend's facets are: beside an open edge, not behind it
-                return blend.facet_distance(&self.surface, k, p, &q).0 - offset;
+                return blend.facet_distance(k, p, &q).0 - offset;
             }
             let nearest = Projection {
                 point: q,
