@@ -38,7 +38,7 @@ impl Observer for Silent {
 
 /// Seconds per internal-force pass, over passes lasting about `budget`.
 fn force_pass(model: &Model, settings: &SolverSettings, budget: Duration) -> f64 {
-    let mut state = State::at_rest(model, settings).unwrap();
+    let mut state = thermostamp::solver::explicit::initial_state(model, settings).unwrap();
     deformed(model, &mut state);
     let mut forces = InternalForces::new(model);
     let dt = 1e-6;
@@ -58,7 +58,7 @@ fn force_pass(model: &Model, settings: &SolverSettings, budget: Duration) -> f64
 
 /// Seconds per whole explicit step over the first `steps` steps of the test.
 fn whole_steps(model: &Model, settings: &SolverSettings, steps: usize) -> f64 {
-    let mut state = State::at_rest(model, settings).unwrap();
+    let mut state = thermostamp::solver::explicit::initial_state(model, settings).unwrap();
     let (dt, _) = InternalForces::new(model)
         .evaluate(model, &mut state, 0.0, 0.0)
         .unwrap();

@@ -73,7 +73,7 @@ fn waviness_tells_waves_from_a_coned_flange() {
     .unwrap();
     let forming = FormingModel::new(&scenario).unwrap();
     let model = &forming.model;
-    let mut state = thermostamp::solver::State::at_rest(model, &forming.settings).unwrap();
+    let mut state = thermostamp::solver::explicit::initial_state(model, &forming.settings).unwrap();
     let areas = model.nodal_areas();
     let shaped = |state: &mut thermostamp::solver::State, z: &dyn Fn(f64, f64) -> f64| {
         for (x, x0) in state.positions.iter_mut().zip(&model.mesh.nodes) {

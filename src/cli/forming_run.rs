@@ -219,13 +219,13 @@ fn write_result_row(
                     .map(|(e, _)| e.area)
                     .fold(0.0, |sum, a| sum + a)
             });
-            let t0 = model.laminate.reference_thickness();
             let thinnest = state
                 .membrane
                 .iter()
-                .map(|m| m.thickness)
+                .enumerate()
+                .map(|(k, m)| m.thickness / model.thickness(k))
                 .fold(f64::INFINITY, f64::min);
-            (above, Some(1.0 - thinnest / t0))
+            (above, Some(1.0 - thinnest))
         }
         None => (None, None),
     };

@@ -105,30 +105,34 @@ pub struct BendingPatch {
     /// Reference area (mm^2) and smallest altitude (mm).
     pub area: f64,
     pub altitude: f64,
+    /// The rigidity of the element's ply.
+    pub rigidity: BendingRigidity,
 }
 
 /// The bending stiffness of a sheet: one patch per element.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Bending {
-    pub rigidity: BendingRigidity,
     pub patches: Vec<BendingPatch>,
 }
 
 impl Bending {
     /// The bending of `mesh`, whose membrane triangles are `elements` (local bases and fibre
-    /// directions), with the reference curvature of the mesh as rest state.
+    /// directions) with rigidities `rigidity[k]`, with the reference curvature of the mesh as
+    /// rest state.
     pub fn new(
         mesh: &Mesh,
         elements: &[MembraneElement],
-        rigidity: BendingRigidity,
+        rigidity: &[BendingRigidity],
     ) -> Result<Self, BendingError> {
-        rigidity.validate()?;
+        for r in rigidity {
+            r.validate()?;
+        }
         check_manifold(mesh)?;
         let around = elements_around_nodes(mesh);
         let patches: Vec<Option<BendingPatch>> = elements
             .par_iter()
             .enumerate()
-            .map(|(k, e)| BendingPatch::new(mesh, e, patch_nodes(mesh, &around, k)))
+            .map(|(k, e)| BendingPatch::new(mesh, e, patch_nodes(mesh, &around, k), rigidity[k]))
             .collect();
         // in order, so that of several singular patches the same one is named on any thread
         // count
@@ -137,7 +141,7 @@ impl Bending {
             .enumerate()
             .map(|(k, t)| t.ok_or(BendingError::SingularPatch(k)))
             .collect::<Result<Vec<_>, _>>()?;
-        Ok(Self { rigidity, patches })
+        Ok(Self { patches })
     }
 
     /// Bending energy of triangle `t` (N·mm) and its forces `dW/dx` on its patch nodes,
@@ -219,7 +223,7 @@ impl Bending {
     /// `A W(k)` and `A dW/dk` for the curvature change `k = (k_XX, k_YY, k_XY)`.
     fn energy_and_moments(&self, t: &BendingPatch, k: &Vector3<f64>) -> (f64, Vector3<f64>) {
         let kappa = Matrix2::new(k.x, k.z, k.z, k.y);
-        let b = &self.rigidity;
+        let b = &t.rigidity;
         let (aa, bb, ab) = (
             t.warp.dot(&(kappa * t.warp)),
             t.weft.dot(&(kappa * t.weft)),
@@ -243,7 +247,7 @@ impl Bending {
     /// `6 x 16 B A / h^4` on a lumped mass of at least `m A / 3`: `omega^2 <= 288 B / (m h^4)`,
     /// `dt = 2 / omega` (the buckling test runs with it at a safety of 0.9).
     pub fn stable_step(&self, t: &BendingPatch, mass_per_area: f64) -> f64 {
-        let b = self.rigidity.warp.max(self.rigidity.weft);
+        let b = t.rigidity.warp.max(t.rigidity.weft);
         let omega_sq = 288.0 * b / (mass_per_area * t.altitude.powi(4));
         if omega_sq > 0.0 {
             2.0 / omega_sq.sqrt()
@@ -256,16 +260,26 @@ impl Bending {
 impl BendingPatch {
     /// The patch of membrane triangle `e` on `nodes` (its corners first); `None` when the
     /// patch admits no unique quadratic (fewer than six nodes, or all on a conic).
-    fn new(mesh: &Mesh, e: &MembraneElement, ring: Vec<usize>) -> Option<Self> {
+    fn new(
+        mesh: &Mesh,
+        e: &MembraneElement,
+        ring: Vec<usize>,
+        rigidity: BendingRigidity,
+    ) -> Option<Self> {
         if e.cell.is_quad() {
-            return Self::quadrilateral(mesh, e, ring);
+            return Self::quadrilateral(mesh, e, ring, rigidity);
         }
         // the corners stay among the candidates (never chosen: they would repeat a point), as
         // the interpolation was first measured
         let candidates: Vec<usize> = e.nodes().iter().copied().chain(ring).collect();
         let corners = [e.nodes()[0], e.nodes()[1], e.nodes()[2]];
         let (nodes, curvature_operator) = interpolation(mesh, e, corners, &candidates)?;
-        Some(Self::at_rest(mesh, e, nodes, curvature_operator))
+        Some(Self::at_rest(
+            mesh,
+            e,
+            (nodes, curvature_operator),
+            rigidity,
+        ))
     }
 
     /// The patch of quadrilateral `e`: the mean of the interpolating patches of the four
@@ -276,7 +290,12 @@ impl BendingPatch {
     /// was tried first and fails: it is blind to a zigzag `w = (-1)^i` along a row of cells
     /// (the four columns of a patch fit it with no quadratic part), into which a compressed
     /// strip relaxes at 0.16 of the Euler load.
-    fn quadrilateral(mesh: &Mesh, e: &MembraneElement, ring: Vec<usize>) -> Option<Self> {
+    fn quadrilateral(
+        mesh: &Mesh,
+        e: &MembraneElement,
+        ring: Vec<usize>,
+        rigidity: BendingRigidity,
+    ) -> Option<Self> {
         let q = e.nodes();
         let nodes: Vec<usize> = q.iter().copied().chain(ring.iter().copied()).collect();
         let mut operator = vec![Vector3::zeros(); nodes.len()];
@@ -296,7 +315,7 @@ impl BendingPatch {
             .filter(|(i, (_, g))| *i < 4 || g.norm() > 0.0)
             .map(|(_, kept)| kept)
             .unzip();
-        Some(Self::at_rest(mesh, e, nodes, operator))
+        Some(Self::at_rest(mesh, e, (nodes, operator), rigidity))
     }
 
     /// The patch on `nodes` with the operator `G`, its rest curvature that of the reference
@@ -304,8 +323,8 @@ impl BendingPatch {
     fn at_rest(
         mesh: &Mesh,
         e: &MembraneElement,
-        nodes: Vec<usize>,
-        curvature_operator: Vec<Vector3<f64>>,
+        (nodes, curvature_operator): (Vec<usize>, Vec<Vector3<f64>>),
+        rigidity: BendingRigidity,
     ) -> Self {
         let mut patch = Self {
             nodes,
@@ -315,6 +334,7 @@ impl BendingPatch {
             weft: Vector2::new(e.fibres.weft.x, e.fibres.weft.y),
             area: e.area,
             altitude: e.altitude,
+            rigidity,
         };
         let frame = CurrentPlane::of(&patch, &mesh.nodes);
         patch.rest_curvature = patch.curvature(&frame, &mesh.nodes);

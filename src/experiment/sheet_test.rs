@@ -7,6 +7,7 @@ use crate::material::Laminate;
 use crate::mesh::{rectangle, DiagonalPattern};
 use crate::solver::checks::{self, CheckReport, CheckSettings};
 use crate::solver::estimate::{self, RunEstimate};
+use crate::solver::explicit;
 use crate::solver::implicit::{self, ImplicitSettings, ImplicitStatistics};
 use crate::solver::{
     Constraint, Energies, Model, Motion, Observer, SolverError, SolverKind, SolverSettings, State,
@@ -227,7 +228,7 @@ pub trait SheetTest {
     /// specimen's inertia shows in the force.
     fn speed_to_shear_wave(&self, laminate: &Laminate, density: f64) -> Result<f64, String> {
         let model = self.model(laminate, density)?;
-        let rest = State::at_rest(&model, &self.settings()).map_err(|e| e.to_string())?;
+        let rest = explicit::initial_state(&model, &self.settings()).map_err(|e| e.to_string())?;
         let area: f64 = model.elements.iter().map(|e| e.area).sum();
         let rho = model
             .elements
@@ -236,7 +237,7 @@ pub trait SheetTest {
             .map(|(e, rho)| rho * e.area)
             .sum::<f64>()
             / area;
-        let g = model
+        let g = model.plies[0]
             .laminate
             .shear_modulus(model.temperature)
             .map_err(|e| e.to_string())?;
@@ -497,7 +498,7 @@ pub fn run_sheet_test(
     };
     let speed = crosshead_speed(model, settle_time);
     let bounds = checks::force_bound(model).and_then(|force| {
-        checks::carried_kinetic_energy(model, settings, speed).map(|work| (force, work))
+        estimate::carried_kinetic_energy(model, settings, speed).map(|work| (force, work))
     });
     let mut statistics = ImplicitStatistics::default();
     let (outcome, checks) = match bounds {
@@ -515,7 +516,9 @@ pub fn run_sheet_test(
                 },
             };
             match solver {
-                SolverKind::Explicit => checks::run(model, settings, check, &mut recorder),
+                SolverKind::Explicit => {
+                    explicit::run_checked(model, settings, check, &mut recorder)
+                }
                 SolverKind::Implicit => {
                     let implicit =
                         ImplicitSettings::new(settings.end_time, settings.output_interval);
@@ -543,9 +546,7 @@ pub fn run_sheet_test(
         Ok(state) => (state.time_step, state.added_mass, state.step),
         Err(_) => (f64::NAN, f64::NAN, recorder.steps),
     };
-    let physical_mass = model.density
-        * model.laminate.reference_thickness()
-        * model.elements.iter().map(|e| e.area).sum::<f64>();
+    let physical_mass = model.physical_mass();
     TestRun {
         summary: RunSummary {
             steps,

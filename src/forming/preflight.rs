@@ -273,7 +273,7 @@ pub fn check_model(
         ToolSet::Files(_) => blank_keys.to_string(),
     };
     estimate::check_memory(estimate.memory, &keys).map_err(on)?;
-    let thickness = model.laminate.reference_thickness();
+    let thickness = model.thinnest_ply();
     estimate::check_tool_travel(
         &estimate,
         punch_speed,

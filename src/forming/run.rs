@@ -6,6 +6,7 @@ use super::setup::FormingModel;
 use crate::experiment::sheet_test::{LiveOutput, Progress};
 use crate::solver::checks::{self, CheckReport, CheckSettings};
 use crate::solver::implicit::{self, ImplicitSettings, ImplicitStatistics};
+use crate::solver::{estimate, explicit};
 use crate::solver::{Energies, Model, Observer, SolverError, SolverKind, State};
 use nalgebra::Vector3;
 use std::time::Instant;
@@ -184,7 +185,7 @@ pub fn run(
     let (outcome, checks) = match check_settings(forming) {
         Ok(check) => match forming.solver {
             SolverKind::Explicit => {
-                checks::run(&forming.model, &forming.settings, check, &mut recorder)
+                explicit::run_checked(&forming.model, &forming.settings, check, &mut recorder)
             }
             SolverKind::Implicit => {
                 let settings = ImplicitSettings {
@@ -223,7 +224,7 @@ fn check_settings(forming: &FormingModel) -> Result<CheckSettings, String> {
         settle_time: 2.0 * forming.punch.ramp_time,
         end_time: forming.settings.end_time,
         force_bound: checks::force_bound(&forming.model)?,
-        loaded_work: checks::carried_kinetic_energy(
+        loaded_work: estimate::carried_kinetic_energy(
             &forming.model,
             &forming.settings,
             forming.punch.speed,

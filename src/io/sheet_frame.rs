@@ -57,7 +57,8 @@ pub fn sheet_frame(model: &Model, state: &State) -> Result<SheetFrame, MaterialE
     if !model.tools.is_empty() {
         point_data.extend(contact_fields(model, state));
     }
-    let n_layers = model.laminate.layers().len();
+    // every ply's laminate has the same layers (`Model::layup`)
+    let n_layers = model.plies[0].laminate.layers().len();
     let mut gamma = Vec::with_capacity(model.elements.len());
     let mut warp = Vec::with_capacity(model.elements.len());
     let mut weft = Vec::with_capacity(model.elements.len());
@@ -76,7 +77,7 @@ pub fn sheet_frame(model: &Model, state: &State) -> Result<SheetFrame, MaterialE
         membrane.push(in_plane(&e.to_global(&state.membrane[k].n)));
         for (layer, out) in layers.iter_mut().enumerate() {
             let s = model
-                .laminate
+                .laminate(k)
                 .layer_stress(layer, &kin, &state.laminate_states[k])?;
             let s2: Matrix2<f64> = s.fixed_view::<2, 2>(0, 0).into_owned();
             out.push(in_plane(&e.to_global(&s2)));
@@ -104,7 +105,10 @@ pub fn sheet_frame(model: &Model, state: &State) -> Result<SheetFrame, MaterialE
             data: FieldData::InPlaneTensor(membrane),
         },
     ];
-    for (values, name) in layers.into_iter().zip(layer_names(&model.laminate)) {
+    for (values, name) in layers
+        .into_iter()
+        .zip(layer_names(&model.plies[0].laminate))
+    {
         if let Some(name) = name {
             cell_data.push(Field {
                 name,

@@ -19,7 +19,7 @@ use nalgebra::Vector3;
 use std::collections::BTreeMap;
 
 /// A meshed sheet in its reference configuration.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct Mesh {
     /// Reference positions (mm).
     pub nodes: Vec<Vector3<f64>>,
@@ -75,6 +75,33 @@ pub enum MeshError {
 }
 
 impl Mesh {
+    /// Adds `other`'s nodes and cells after this mesh's (its node and cell numbers shifted by
+    /// this mesh's counts), its sets under `prefix` + their names. Per-cell warp directions stay
+    /// where both meshes have them or neither does; where only one has them, the cells of the
+    /// other take none and the mesh keeps none (the caller projects its own direction first).
+    pub fn append(&mut self, other: Mesh, prefix: &str) {
+        let (nodes, cells) = (self.nodes.len(), self.cells.len());
+        self.warp_directions = match (self.warp_directions.take(), other.warp_directions) {
+            (Some(mut mine), Some(theirs)) => {
+                mine.extend(theirs);
+                Some(mine)
+            }
+            (None, Some(theirs)) if cells == 0 => Some(theirs),
+            _ => None,
+        };
+        self.nodes.extend(other.nodes);
+        self.cells
+            .extend(other.cells.iter().map(|c| c.map(|n| n + nodes)));
+        for (name, set) in other.node_sets {
+            let shifted = set.into_iter().map(|n| n + nodes).collect();
+            self.node_sets.insert(format!("{prefix}{name}"), shifted);
+        }
+        for (name, set) in other.element_sets {
+            let shifted = set.into_iter().map(|c| c + cells).collect();
+            self.element_sets.insert(format!("{prefix}{name}"), shifted);
+        }
+    }
+
     /// Checks indices, coordinates and areas.
     pub fn validate(&self) -> Result<(), MeshError> {
         if self.cells.is_empty() {

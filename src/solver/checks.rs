@@ -1,4 +1,4 @@
-//! Run-time checks shared by every run of the explicit solver (forming runs and the virtual
+//! Run-time checks that wrap every run of either solver (forming runs and the virtual
 //! tests): what explicit codes watch so that a run whose result means nothing does not end
 //! quietly. At every checkpoint (the explicit solver's records, the implicit solver's
 //! increments, [`Observer::checkpoint`]): the kinetic energy against the internal work, the energy balance,
@@ -7,8 +7,10 @@
 //! kept by the observer); one past its warning level is reported in the [`CheckReport`].
 
 use super::energy::Energies;
-use super::explicit::{self, Observer, SolverError, SolverSettings, State};
-use super::model::Model;
+use super::error::{CheckStop, SolverError};
+use super::model::{Model, Ply};
+use super::observer::Observer;
+use super::state::State;
 use crate::contact::penalty::nodes_through_tools;
 use crate::contact::ToolMotion;
 use nalgebra::Vector3;
@@ -98,20 +100,6 @@ impl CheckReport {
     }
 }
 
-/// Why a check stopped a run.
-#[derive(Clone, Debug, PartialEq, thiserror::Error)]
-#[error(
-    "check '{check}' stopped the run at step {step}, t = {time:.6e} s: {figure}; {advice} \
-     (the records so far are kept)"
-)]
-pub struct CheckStop {
-    pub check: &'static str,
-    pub step: usize,
-    pub time: f64,
-    pub figure: String,
-    pub advice: String,
-}
-
 /// What the checks know of a run beyond its model.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CheckSettings {
@@ -129,8 +117,9 @@ pub struct CheckSettings {
 }
 
 /// The physical bound of the forces of a run (N): every yarn across the blank stretched by
-/// [`FORCE_BOUND_STRAIN`] at the laminate's stiffest wave modulus at rest, `E t L` with `L` the
-/// perimeter of the blank's bounding box, plus the forces applied to force-driven tools.
+/// [`FORCE_BOUND_STRAIN`] at its laminate's stiffest wave modulus at rest, `sum_plies E t L`
+/// with `L` the perimeter of the blank's bounding box, plus the forces applied to force-driven
+/// tools.
 pub fn force_bound(model: &Model) -> Result<f64, String> {
     let (mut lo, mut hi) = (
         Vector3::repeat(f64::INFINITY),
@@ -150,50 +139,23 @@ pub fn force_bound(model: &Model) -> Result<f64, String> {
             _ => 0.0,
         })
         .sum();
-    let modulus = rest_wave_modulus(model)?;
-    Ok(FORCE_BOUND_STRAIN * modulus * model.laminate.reference_thickness() * perimeter + applied)
+    let mut stiffness = 0.0;
+    for ply in &model.plies {
+        stiffness += rest_wave_modulus(model, ply)? * ply.laminate.reference_thickness();
+    }
+    Ok(FORCE_BOUND_STRAIN * stiffness * perimeter + applied)
 }
 
-/// The largest wave modulus of the elements at rest (MPa).
-fn rest_wave_modulus(model: &Model) -> Result<f64, String> {
-    let laminate = &model.laminate;
-    let rest = laminate.initial_state();
-    (0..model.elements.len()).try_fold(0.0, |most: f64, k| {
-        let kin = explicit::rest_kinematics(model, k);
-        let modulus = laminate
+/// The largest wave modulus of the ply's elements at rest (MPa).
+fn rest_wave_modulus(model: &Model, ply: &Ply) -> Result<f64, String> {
+    let rest = ply.laminate.initial_state();
+    ply.elements.clone().try_fold(0.0, |most: f64, k| {
+        let kin = model.rest_kinematics(k);
+        let modulus = ply
+            .laminate
             .wave_modulus(&kin, &rest)
             .map_err(|err| err.to_string())?;
         Ok(most.max(modulus))
-    })
-}
-
-/// The kinetic energy of the whole sheet carried at the tool's (or crosshead's) `speed`
-/// (simulated mm/s), `M v^2 / 2` with the mass after mass scaling (N·mm). Until the sheet has
-/// taken that much internal work its kinetic energy is of the size of the internal work in any
-/// run (a punch lifting a blank carries it along), so the kinetic energy stops a run only
-/// after it.
-pub fn carried_kinetic_energy(
-    model: &Model,
-    settings: &SolverSettings,
-    speed: f64,
-) -> Result<f64, String> {
-    let (_, added_ratio) = super::estimate::rest_step(model, settings)?;
-    let area: f64 = model.elements.iter().map(|e| e.area).sum();
-    let mass = model.density * model.laminate.reference_thickness() * area * (1.0 + added_ratio);
-    Ok(0.5 * mass * speed * speed)
-}
-
-/// Runs the explicit solver with the checks watching every record; returns the outcome and the
-/// report.
-/// A stop by a check is a [`SolverError::Check`].
-pub fn run(
-    model: &Model,
-    settings: &SolverSettings,
-    check: CheckSettings,
-    observer: &mut dyn Observer,
-) -> (Result<State, SolverError>, CheckReport) {
-    watched(model, check, observer, |watched| {
-        explicit::run(model, settings, watched)
     })
 }
 

@@ -1,4 +1,4 @@
-//! Energy bookkeeping of an explicit run: what went in, where it is, and the balance.
+//! Energy bookkeeping of a run: what went in, where it is, and the balance.
 
 /// Energies at one instant (N·mm = mJ).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -18,6 +18,9 @@ pub struct Energies {
     pub damping: f64,
     /// Energy taken by the yarn-rate damping (part of the internal work).
     pub numerical_damping: f64,
+    /// Work of the plies' contact and friction forces on one another, `sum f . du` over every
+    /// node: minus what the film dissipated and the contact springs hold; 0 for one ply.
+    pub interply_work: f64,
 }
 
 impl Energies {
@@ -27,9 +30,9 @@ impl Energies {
         self.internal_work - self.elastic - self.numerical_damping
     }
 
-    /// `W_ext - W_int - E_kin - W_damp`: zero for an exact integration.
+    /// `W_ext + W_ply - W_int - E_kin - W_damp`: zero for an exact integration.
     pub fn balance(&self) -> f64 {
-        self.external_work - self.internal_work - self.kinetic - self.damping
+        self.external_work + self.interply_work - self.internal_work - self.kinetic - self.damping
     }
 
     /// The balance relative to the external work (0 when nothing was put in yet).

@@ -2,7 +2,7 @@
 //! how long it will run, and the set-up refusals that follow from them (a run that cannot fit
 //! the machine, an absurd step count, a travel covered in too few steps).
 
-use super::explicit::{rest_kinematics, SolverSettings};
+use super::explicit::SolverSettings;
 use super::model::Model;
 use crate::contact::NodeContact;
 use crate::element::bending::BendingPatch;
@@ -156,22 +156,21 @@ const RESIDENT_SLACK: f64 = 8.0 * 1024.0 * 1024.0;
 /// membrane (and bending) step at rest on the physical density, as mass scaling brings every
 /// element below the target up to it. Also the mass it adds over the physical mass.
 pub fn rest_step(model: &Model, settings: &SolverSettings) -> Result<(f64, f64), String> {
-    let laminate = &model.laminate;
-    let thickness = laminate.reference_thickness();
-    let rest = laminate.initial_state();
     let mut step = f64::INFINITY;
     let (mut added, mut physical) = (0.0, 0.0);
     for (k, e) in model.elements.iter().enumerate() {
-        let kin = rest_kinematics(model, k);
+        let (laminate, density) = (model.laminate(k), model.density(k));
+        let thickness = laminate.reference_thickness();
+        let kin = model.rest_kinematics(k);
         let modulus = laminate
-            .wave_modulus(&kin, &rest)
+            .wave_modulus(&kin, &laminate.initial_state())
             .map_err(|err| format!("element {k}: {err}"))?;
-        let mut element_step = e.altitude * (model.density / modulus).sqrt();
+        let mut element_step = e.altitude * (density / modulus).sqrt();
         if let Some(bending) = &model.bending {
-            element_step = element_step
-                .min(bending.stable_step(&bending.patches[k], model.density * thickness));
+            element_step =
+                element_step.min(bending.stable_step(&bending.patches[k], density * thickness));
         }
-        let mass = model.density * thickness * e.area;
+        let mass = density * thickness * e.area;
         physical += mass;
         if let Some(target) = settings.target_time_step {
             if element_step < target {
@@ -197,7 +196,11 @@ pub fn estimate(model: &Model, settings: &SolverSettings) -> Result<RunEstimate,
         elements: model.elements.len(),
         quads: model.elements.iter().filter(|e| e.cell.is_quad()).count(),
         nodes: model.mesh.nodes.len(),
-        layers: model.laminate.initial_state().thickness_stretch.len(),
+        layers: model.plies[0]
+            .laminate
+            .initial_state()
+            .thickness_stretch
+            .len(),
         bending: model.bending.is_some(),
         tools: model.tools.len(),
         tool_triangles: model.tools.iter().map(|t| t.surface.triangles.len()).sum(),
@@ -342,6 +345,21 @@ pub fn format_seconds(s: f64) -> String {
     } else {
         format!("{:.1} h", s / 3600.0)
     }
+}
+
+/// The kinetic energy of the whole sheet carried at the tool's (or crosshead's) `speed`
+/// (simulated mm/s), `M v^2 / 2` with the mass after mass scaling (N·mm). Until the sheet has
+/// taken that much internal work its kinetic energy is of the size of the internal work in any
+/// run (a punch lifting a blank carries it along), so the kinetic energy stops a run only
+/// after it.
+pub fn carried_kinetic_energy(
+    model: &Model,
+    settings: &SolverSettings,
+    speed: f64,
+) -> Result<f64, String> {
+    let (_, added_ratio) = rest_step(model, settings)?;
+    let mass = model.physical_mass() * (1.0 + added_ratio);
+    Ok(0.5 * mass * speed * speed)
 }
 
 #[cfg(test)]

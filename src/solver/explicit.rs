@@ -9,15 +9,18 @@
 //! times `sqrt(1 + xi^2) - xi` for the damping `xi` of the element's highest mode by the yarn
 //! damping and the matrix viscosity (the critical step of a damped oscillator).
 
+use super::checks::{self, CheckReport, CheckSettings};
 use super::energy::Energies;
+use super::error::{positive_setting, SolverError};
 use super::model::{Model, Motion};
+use super::observer::Observer;
+use super::state::State;
 use super::yarn_damping::{step_reduction, yarn_damping_resultant};
-use crate::contact::penalty::{self, NodeContact, Nodes, ToolLoad};
+use crate::contact::penalty::{self, Nodes};
+use crate::contact::ply_contact::{PlyContact, PlyNodes};
 use crate::element::Bending;
-use crate::material::{
-    LaminateState, MaterialError, MembraneKinematics, MembraneResponse, StepModuli,
-};
-use nalgebra::{Matrix2, Vector3};
+use crate::material::{MaterialError, MembraneKinematics, StepModuli};
+use nalgebra::Vector3;
 use rayon::prelude::*;
 
 /// How to integrate.
@@ -40,110 +43,6 @@ pub struct SolverSettings {
     /// element's highest yarn mode (see [`super::yarn_damping`]); 0.06 is a good default, as
     /// for the linear bulk viscosity of explicit codes. Zero: none.
     pub yarn_damping: f64,
-}
-
-/// The integrated state at one instant.
-#[derive(Clone, Debug)]
-pub struct State {
-    pub step: usize,
-    pub time: f64,
-    /// Current positions (mm).
-    pub positions: Vec<Vector3<f64>>,
-    /// Velocities at the last half step (mm/s).
-    pub velocities: Vec<Vector3<f64>>,
-    /// Lumped nodal masses, mass scaling included (tonne).
-    pub masses: Vec<f64>,
-    /// Internal nodal forces (N).
-    pub internal_forces: Vec<Vector3<f64>>,
-    /// Reaction forces at constrained nodes, zero elsewhere (N).
-    pub reactions: Vec<Vector3<f64>>,
-    /// Membrane resultant and thickness per element.
-    pub membrane: Vec<MembraneResponse>,
-    /// Laminate state variables per element.
-    pub laminate_states: Vec<LaminateState>,
-    /// Per-element density after mass scaling (tonne/mm^3).
-    pub densities: Vec<f64>,
-    /// Step that led here (s).
-    pub time_step: f64,
-    pub energies: Energies,
-    /// Mass added by mass scaling (tonne).
-    pub added_mass: f64,
-    /// Translation of each tool from its place at the start (mm), and its velocity over the
-    /// last step (mm/s).
-    pub tool_translations: Vec<Vector3<f64>>,
-    pub tool_velocities: Vec<Vector3<f64>>,
-    /// Force of the blank on each tool at the last step (N): minus the punch force etc.
-    pub tool_loads: Vec<ToolLoad>,
-    /// Time integral of each tool's load force since the start (N·s): its difference between
-    /// two records over their time apart is the mean force in between, free of the step-to-step
-    /// ringing of the contact springs.
-    pub tool_impulses: Vec<Vector3<f64>>,
-    /// Contact of each node with the tools (force on the node, per-tool normal and
-    /// tangential forces).
-    pub contacts: Vec<NodeContact>,
-}
-
-/// Receives the state while the solver runs.
-pub trait Observer {
-    /// At t = 0, every output interval and at the end; an error stops the run.
-    fn record(&mut self, model: &Model, state: &State) -> anyhow::Result<()>;
-    /// Where the run-time checks look (`checks::watched`), at a pace of the solver's own: the
-    /// explicit solver's every record, the implicit solver's every increment, so that what
-    /// they find does not depend on how often the implicit solver records. An error stops the
-    /// run, the state recorded first.
-    fn checkpoint(&mut self, _model: &Model, _state: &State) -> anyhow::Result<()> {
-        Ok(())
-    }
-    /// Every few hundred steps, for progress reports.
-    fn progress(&mut self, _state: &State) {}
-    /// Asked once per step: whether the user asked the run to stop (Ctrl-C). When it says yes
-    /// the run records the current state once more and stops with
-    /// [`SolverError::Interrupted`].
-    fn interrupted(&mut self) -> bool {
-        false
-    }
-}
-
-/// Why a run stopped early.
-#[derive(Debug, thiserror::Error)]
-pub enum SolverError {
-    #[error(
-        "the run went unstable at step {step}, t = {time:.6e} s, in element {element}: {reason} \
-         (energies: kinetic {kinetic:.4e}, internal {internal:.4e}, external {external:.4e} N·mm)"
-    )]
-    Unstable {
-        step: usize,
-        time: f64,
-        element: usize,
-        reason: String,
-        kinetic: f64,
-        internal: f64,
-        external: f64,
-    },
-    #[error("bad solver settings: {0}")]
-    Settings(String),
-    #[error("writing results at t = {time:.6e} s: {source:#}")]
-    Output { time: f64, source: anyhow::Error },
-    #[error("interrupted at step {step}, t = {time:.6e} s")]
-    Interrupted { step: usize, time: f64 },
-    /// The implicit solver could not converge an increment however small (the results up to
-    /// the last converged one are kept).
-    #[error(
-        "increment {increment} from t = {time:.6e} s (last tried {increment_time:.3e} s) did not \
-         converge: {reason}; residual norms (N) {residuals:?}; largest residuals at nodes \
-         {worst_nodes:?}"
-    )]
-    NotConverged {
-        increment: usize,
-        time: f64,
-        increment_time: f64,
-        reason: String,
-        residuals: Vec<f64>,
-        worst_nodes: Vec<usize>,
-    },
-    /// A run-time check ([`super::checks`]) found the result meaningless.
-    #[error(transparent)]
-    Check(super::checks::CheckStop),
 }
 
 /// What the element loop returns per element.
@@ -198,11 +97,27 @@ struct PreviousStep {
     forces: Vec<Vector3<f64>>,
     /// Contact forces of the tools on the nodes.
     contact: Vec<Vector3<f64>>,
+    /// Contact forces of the neighbouring plies on the nodes.
+    interply: Vec<Vector3<f64>>,
     reactions: Vec<Vector3<f64>>,
     /// `x_n - x_{n-1}`.
     increments: Vec<Vector3<f64>>,
     /// `dt_{n-1/2}`.
     time_step: f64,
+}
+
+/// Runs the explicit solver with the checks watching every record; returns the outcome and the
+/// report.
+/// A stop by a check is a [`SolverError::Check`].
+pub fn run_checked(
+    model: &Model,
+    settings: &SolverSettings,
+    check: CheckSettings,
+    observer: &mut dyn Observer,
+) -> (Result<State, SolverError>, CheckReport) {
+    checks::watched(model, check, observer, |watched| {
+        run(model, settings, watched)
+    })
 }
 
 /// Integrates `model` to `settings.end_time`, reporting to `observer`. On an instability the
@@ -215,11 +130,13 @@ pub fn run(
     check_settings(settings)?;
     let mut forces = InternalForces::new(model);
     let prescribed = prescribed_motion(model);
-    let mut state = State::at_rest(model, settings)?;
+    let mut state = initial_state(model, settings)?;
     let zeros = vec![Vector3::zeros(); model.mesh.nodes.len()];
+    let mut ply_contact = ply_contact(model);
     let mut previous = PreviousStep {
         forces: zeros.clone(),
         contact: zeros.clone(),
+        interply: zeros.clone(),
         reactions: zeros.clone(),
         increments: zeros,
         time_step: 0.0,
@@ -236,10 +153,19 @@ pub fn run(
             // would otherwise stiffen it without bound
             tool_contact(model, &mut state, full_step);
         }
+        if let Some(plies) = &mut ply_contact {
+            let nodes = PlyNodes {
+                positions: &state.positions,
+                velocities: &state.velocities,
+                masses: &state.masses,
+            };
+            plies.evaluate(nodes, full_step, &mut state.interply);
+        }
         let last = state.time >= settings.end_time;
         let stop = observer.interrupted();
         if last || stop || state.time >= next_output - 1e-9 * settings.output_interval {
-            state.energies.elastic = elastic_energy(model, &state)
+            state.energies.elastic = state
+                .elastic_energy(model)
                 .map_err(|(element, e)| unstable(&state, element, e.to_string()))?;
             observer
                 .record(model, &state)
@@ -321,14 +247,15 @@ fn advance(
     let dt_mean = 0.5 * (previous.time_step + dt);
     let t_half = state.time + 0.5 * dt;
     let (mut kinetic, mut internal, mut external, mut damping_work) = (0.0, 0.0, 0.0, 0.0);
-    let mut tool = 0.0;
+    let (mut tool, mut interply) = (0.0, 0.0);
     // m (v_new - v_old)/dt + c m (v_new + v_old)/2 + f = 0, solved for v_new
     let half_damp = 0.5 * damping * dt_mean;
     for (a, motion) in prescribed.iter().enumerate() {
         let m = state.masses[a];
         let f_int = state.internal_forces[a];
         let f_contact = state.contacts[a].force;
-        let f = f_int - f_contact;
+        let f_ply = state.interply.get(a).map_or(Vector3::zeros(), |c| c.force);
+        let f = f_int - f_contact - f_ply;
         let v_old = state.velocities[a];
         let free = (v_old * (1.0 - half_damp) - f * (dt_mean / m)) / (1.0 + half_damp);
         let held = held_components(*motion);
@@ -351,12 +278,14 @@ fn advance(
         internal += 0.5 * (previous.forces[a] + f_int).dot(&previous.increments[a]);
         external += 0.5 * (previous.reactions[a] + reaction).dot(&previous.increments[a]);
         tool += 0.5 * (previous.contact[a] + f_contact).dot(&previous.increments[a]);
+        interply += 0.5 * (previous.interply[a] + f_ply).dot(&previous.increments[a]);
         let increment = v_new * dt;
         state.velocities[a] = v_new;
         state.reactions[a] = reaction;
         state.positions[a] += increment;
         previous.forces[a] = f_int;
         previous.contact[a] = f_contact;
+        previous.interply[a] = f_ply;
         previous.reactions[a] = reaction;
         previous.increments[a] = increment;
     }
@@ -370,7 +299,29 @@ fn advance(
     state.energies.internal_work += internal;
     state.energies.external_work += external + tool;
     state.energies.tool_work += tool;
+    state.energies.interply_work += interply;
     state.energies.damping += damping_work;
+}
+
+/// The contact between the plies of `model` across its interfaces; `None` without any. The
+/// Verlet margin is half the mean cell size.
+fn ply_contact(model: &Model) -> Option<PlyContact> {
+    if model.interfaces.is_empty() {
+        return None;
+    }
+    let mean_size =
+        model.elements.iter().map(|e| e.area.sqrt()).sum::<f64>() / model.elements.len() as f64;
+    let settings = (
+        model.contact.penalty_scale,
+        model.thinnest_ply(),
+        0.5 * mean_size,
+    );
+    Some(PlyContact::new(
+        model.ply_surfaces(),
+        model.interfaces.clone(),
+        model.nodal_areas(),
+        settings,
+    ))
 }
 
 /// Contact forces of the tools on every node for the step `dt` about to be taken
@@ -420,37 +371,6 @@ fn gather_forces(forces: &InternalForces, nodal: &mut [Vector3<f64>]) {
     });
 }
 
-/// Elastic energy stored in the sheet, `sum_e A0 sum_k t_k W_k` plus the hinges' bending
-/// energy. The per-element energies are computed in parallel and summed in element order, so
-/// the total is the same on any thread count (it is only needed at the records).
-pub(crate) fn elastic_energy(model: &Model, state: &State) -> Result<f64, (usize, MaterialError)> {
-    let membrane: Vec<Result<f64, (usize, MaterialError)>> = model
-        .elements
-        .par_iter()
-        .enumerate()
-        .map(|(k, e)| {
-            let f = e.gradient(&state.positions);
-            let f_dot = e.gradient(&state.velocities);
-            let kin = MembraneKinematics::from_deformation(&f, &f_dot, model.temperature, e.fibres);
-            let w = model
-                .laminate
-                .stored_energy(&kin, &state.laminate_states[k])
-                .map_err(|err| (k, err))?;
-            Ok(e.area * w + e.hourglass_energy(&state.positions, &model.hourglass))
-        })
-        .collect();
-    let membrane: f64 = membrane.into_iter().sum::<Result<f64, _>>()?;
-    let bending: f64 = model.bending.as_ref().map_or(0.0, |b| {
-        let energies: Vec<f64> = b
-            .patches
-            .par_iter()
-            .map(|t| b.energy(t, &state.positions))
-            .collect();
-        energies.iter().sum()
-    });
-    Ok(membrane + bending)
-}
-
 /// An explicit run that goes unstable creates energy from nothing: the balance error grows
 /// past the energy the machine put in. A stable run stays within a few per cent of it.
 fn energy_runs_away(e: &Energies) -> bool {
@@ -480,16 +400,6 @@ fn fastest_element(model: &Model, state: &State) -> usize {
         .iter()
         .position(|e| e.nodes().contains(&node))
         .unwrap_or(0)
-}
-
-/// `Ok` for a finite positive setting `v`, else a settings error naming it: either solver's
-/// checks.
-pub(crate) fn positive_setting(name: &str, v: f64) -> Result<(), SolverError> {
-    if v.is_finite() && v > 0.0 {
-        Ok(())
-    } else {
-        Err(SolverError::Settings(format!("{name} = {v} must be > 0")))
-    }
 }
 
 fn check_settings(s: &SolverSettings) -> Result<(), SolverError> {
@@ -619,14 +529,14 @@ fn bending_loop(
     forces: &mut [Vector3<f64>],
     offsets: &[usize],
 ) -> f64 {
-    let thickness = model.laminate.reference_thickness();
     split_at_offsets(forces, offsets)
         .into_par_iter()
         .zip(bending.patches.par_iter())
         .zip(state.densities.par_iter())
-        .map(|((f, t), rho)| {
+        .enumerate()
+        .map(|(k, ((f, t), rho))| {
             bending.forces(t, &state.positions, f);
-            bending.stable_step(t, rho * thickness)
+            bending.stable_step(t, rho * model.thickness(k))
         })
         .reduce(|| f64::INFINITY, f64::min)
 }
@@ -648,105 +558,56 @@ fn split_at_offsets<'a>(
 
 /// Stable step of the bending modes of each triangle on its density.
 fn bending_steps(model: &Model, bending: &Bending, densities: &[f64]) -> Vec<f64> {
-    let thickness = model.laminate.reference_thickness();
     bending
         .patches
         .iter()
         .zip(densities)
-        .map(|(t, rho)| bending.stable_step(t, rho * thickness))
+        .enumerate()
+        .map(|(k, (t, rho))| bending.stable_step(t, rho * model.thickness(k)))
         .collect()
 }
 
-impl State {
-    /// Rest state, lumped masses, and mass scaling from the stable step at rest.
-    pub fn at_rest(model: &Model, settings: &SolverSettings) -> Result<State, SolverError> {
-        let n_nodes = model.mesh.nodes.len();
-        let laminate = &model.laminate;
-        let thickness = laminate.reference_thickness();
-        let mut densities = vec![model.density; model.elements.len()];
-        let mut added_mass = 0.0;
-        let mut steps = Vec::with_capacity(model.elements.len());
-        for (k, e) in model.elements.iter().enumerate() {
-            let kin = rest_kinematics(model, k);
-            let modulus = laminate
-                .wave_modulus(&kin, &laminate.initial_state())
-                .map_err(|err| SolverError::Settings(format!("element {k}: {err}")))?;
-            steps.push(e.altitude * (model.density / modulus).sqrt());
-        }
-        if let Some(bending) = &model.bending {
-            for (step, bending_step) in steps
-                .iter_mut()
-                .zip(bending_steps(model, bending, &densities))
-            {
-                *step = step.min(bending_step);
-            }
-        }
-        for ((k, e), &step) in model.elements.iter().enumerate().zip(&steps) {
-            if let Some(target) = settings.target_time_step {
-                if step < target {
-                    densities[k] = model.density * (target / step).powi(2);
-                    added_mass += (densities[k] - model.density) * thickness * e.area;
-                }
-            }
-        }
-        let mut masses = vec![0.0; n_nodes];
-        for (e, rho) in model.elements.iter().zip(&densities) {
-            let share = rho * thickness * e.area / e.nodes().len() as f64;
-            for &n in e.nodes() {
-                masses[n] += share;
-            }
-        }
-        Ok(State::undeformed(model, masses, densities, added_mass))
+/// The rest state of an explicit run: lumped masses, and mass scaling from the stable step at
+/// rest.
+pub fn initial_state(model: &Model, settings: &SolverSettings) -> Result<State, SolverError> {
+    let n_nodes = model.mesh.nodes.len();
+    let mut densities: Vec<f64> = (0..model.elements.len())
+        .map(|k| model.density(k))
+        .collect();
+    let mut added_mass = 0.0;
+    let mut steps = Vec::with_capacity(model.elements.len());
+    for (k, e) in model.elements.iter().enumerate() {
+        let laminate = model.laminate(k);
+        let kin = model.rest_kinematics(k);
+        let modulus = laminate
+            .wave_modulus(&kin, &laminate.initial_state())
+            .map_err(|err| SolverError::Settings(format!("element {k}: {err}")))?;
+        steps.push(e.altitude * (model.density(k) / modulus).sqrt());
     }
-
-    /// The undeformed model at rest at `t = 0`, with these lumped masses and element densities
-    /// (mass scaling `added_mass` included): the start of either solver.
-    pub(crate) fn undeformed(
-        model: &Model,
-        masses: Vec<f64>,
-        densities: Vec<f64>,
-        added_mass: f64,
-    ) -> State {
-        let n_nodes = model.mesh.nodes.len();
-        let thickness = model.laminate.reference_thickness();
-        State {
-            step: 0,
-            time: 0.0,
-            positions: model.mesh.nodes.clone(),
-            velocities: vec![Vector3::zeros(); n_nodes],
-            masses,
-            internal_forces: vec![Vector3::zeros(); n_nodes],
-            reactions: vec![Vector3::zeros(); n_nodes],
-            membrane: vec![
-                MembraneResponse {
-                    n: Matrix2::zeros(),
-                    thickness
-                };
-                model.elements.len()
-            ],
-            laminate_states: vec![model.laminate.initial_state(); model.elements.len()],
-            densities,
-            time_step: 0.0,
-            energies: Energies::default(),
-            added_mass,
-            tool_translations: vec![Vector3::zeros(); model.tools.len()],
-            tool_velocities: vec![Vector3::zeros(); model.tools.len()],
-            tool_loads: vec![ToolLoad::default(); model.tools.len()],
-            tool_impulses: vec![Vector3::zeros(); model.tools.len()],
-            contacts: vec![NodeContact::default(); n_nodes],
+    if let Some(bending) = &model.bending {
+        for (step, bending_step) in steps
+            .iter_mut()
+            .zip(bending_steps(model, bending, &densities))
+        {
+            *step = step.min(bending_step);
         }
     }
-}
-
-/// Element `k` of `model` undeformed and at rest, at the model's temperature: what the stable
-/// step at rest and the run's estimate and checks evaluate the laminate on.
-pub(crate) fn rest_kinematics(model: &Model, k: usize) -> MembraneKinematics {
-    MembraneKinematics {
-        c: Matrix2::identity(),
-        c_dot: Matrix2::zeros(),
-        temperature: model.temperature,
-        fibres: model.elements[k].fibres,
+    for ((k, e), &step) in model.elements.iter().enumerate().zip(&steps) {
+        if let Some(target) = settings.target_time_step {
+            if step < target {
+                densities[k] = model.density(k) * (target / step).powi(2);
+                added_mass += (densities[k] - model.density(k)) * model.thickness(k) * e.area;
+            }
+        }
     }
+    let mut masses = vec![0.0; n_nodes];
+    for (k, (e, rho)) in model.elements.iter().zip(&densities).enumerate() {
+        let share = rho * model.thickness(k) * e.area / e.nodes().len() as f64;
+        for &n in e.nodes() {
+            masses[n] += share;
+        }
+    }
+    Ok(State::undeformed(model, masses, densities, added_mass))
 }
 
 /// Membrane forces of every element at the current positions (in parallel), the stable step
@@ -763,8 +624,6 @@ fn element_loop(
     let positions = &state.positions;
     let velocities = &state.velocities;
     let densities = &state.densities;
-    let laminate = &model.laminate;
-    let thickness = laminate.reference_thickness();
     let chunks: Vec<Result<(f64, f64), (usize, MaterialError)>> = results
         .par_chunks_mut(CHUNK)
         .zip(state.laminate_states.par_chunks_mut(CHUNK))
@@ -776,6 +635,8 @@ fn element_loop(
             for (i, ((result, lam_state), membrane)) in items.enumerate() {
                 let k = c * CHUNK + i;
                 let e = &model.elements[k];
+                let ply = model.ply_of(k);
+                let (laminate, thickness) = (&ply.laminate, ply.laminate.reference_thickness());
                 let f = e.gradient(positions);
                 let f_dot = e.gradient(velocities);
                 let kin =
@@ -794,7 +655,7 @@ fn element_loop(
                 let (n_damping, power) =
                     yarn_damping_resultant(&kin, xi, element_step, modulus, thickness);
                 result.forces = e.internal_forces(&f, &(response.n + n_damping));
-                e.hourglass_forces(positions, &f, &model.hourglass, &mut result.forces);
+                e.hourglass_forces(positions, &f, &ply.hourglass, &mut result.forces);
                 let xi_total = xi + material_damping_ratio(viscosity, modulus, element_step);
                 result.stable_step = element_step * step_reduction(xi_total);
                 result.damping_power = power * e.area;

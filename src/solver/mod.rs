@@ -1,18 +1,27 @@
 //! The solvers of the sheet over one shared [`Model`]: explicit dynamics (docs/model.md §6,
 //! central differences with lumped mass, stable step from the current wave speed, optional mass
-//! scaling, energy bookkeeping) and quasi-static implicit increments (docs/solver.md).
+//! scaling) and quasi-static implicit increments (docs/solver.md). Both advance the same
+//! [`State`], report to the same [`Observer`], stop with the same [`SolverError`] and are
+//! watched by the same [`checks`]; `explicit` and `implicit` are siblings over those and do not
+//! import each other.
 
 pub mod checks;
 pub mod energy;
+pub mod error;
 pub mod estimate;
 pub mod explicit;
 pub mod implicit;
 pub mod model;
+pub mod observer;
+pub mod state;
 pub mod yarn_damping;
 
 pub use energy::Energies;
-pub use explicit::{run, InternalForces, Observer, SolverError, SolverSettings, State};
+pub use error::{CheckStop, SolverError};
+pub use explicit::{run, InternalForces, SolverSettings};
 pub use model::{Constraint, Model, Motion};
+pub use observer::Observer;
+pub use state::State;
 
 /// Which solver runs a model (docs/solver.md, "Which solver").
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Deserialize, clap::ValueEnum)]

@@ -1,5 +1,9 @@
-//! What the solver integrates: the meshed sheet, its laminate, and the constraints.
+//! What the solver integrates: the meshed plies of the blank, each with its laminate, and the
+//! constraints. The plies' nodes and elements are numbered one ply after the other in one mesh,
+//! so that the solvers, the tangent and the writers see one set of nodes; each ply knows its
+//! ranges.
 
+use crate::contact::ply_contact::{PlyInterface, PlySurface};
 use crate::contact::{ContactSettings, RigidTool};
 use crate::element::bending::BendingError;
 use crate::element::membrane::ElementError;
@@ -7,7 +11,8 @@ use crate::element::membrane::HourglassModuli;
 use crate::element::{Bending, BendingRigidity, MembraneElement};
 use crate::material::{FibreDirections, Laminate, MaterialError, MembraneKinematics};
 use crate::mesh::{Mesh, MeshError};
-use nalgebra::Vector3;
+use nalgebra::{Matrix2, Vector3};
+use std::ops::Range;
 use std::sync::Arc;
 
 /// Velocity of a constrained node at time `t` given its reference position.
@@ -43,9 +48,40 @@ pub struct Constraint {
     pub motion: Motion,
 }
 
+/// One sheet of the blank: its nodes and elements in the model's numbering and its material.
+#[derive(Clone, Debug)]
+pub struct Ply {
+    pub name: String,
+    pub nodes: Range<usize>,
+    pub elements: Range<usize>,
+    /// The ply's laminate, its temperature tables interpolated once at the run's temperature
+    /// (the run is isothermal).
+    pub laminate: Laminate,
+    /// What holds the hourglass mode of its quadrilaterals
+    /// ([`MembraneElement::hourglass_forces`]): the laminate's shear and yarn stiffness at
+    /// rest; zero on a mesh of triangles.
+    pub hourglass: HourglassModuli,
+    /// Density of the ply (tonne/mm^3).
+    pub density: f64,
+}
+
+/// A ply as it is given to [`Model::layup`]: its own mesh, laminate and warp direction.
+#[derive(Clone, Debug)]
+pub struct PlySheet {
+    pub name: String,
+    pub mesh: Mesh,
+    pub laminate: Laminate,
+    /// Density (tonne/mm^3).
+    pub density: f64,
+    /// Projected onto each element, unless the mesh gives its own per-element directions
+    /// (`Mesh::warp_directions`).
+    pub warp_direction: Vector3<f64>,
+}
+
 /// A blank ready to be integrated.
 #[derive(Clone, Debug)]
 pub struct Model {
+    /// Every ply's nodes and cells, one ply after the other.
     pub mesh: Mesh,
     pub elements: Vec<MembraneElement>,
     /// Bending stiffness; `None` for a membrane.
@@ -53,13 +89,12 @@ pub struct Model {
     /// Rigid tools in contact with the blank, and how the contact is computed.
     pub tools: Vec<RigidTool>,
     pub contact: ContactSettings,
-    pub laminate: Laminate,
-    /// What holds the hourglass mode of the quadrilaterals
-    /// ([`MembraneElement::hourglass_forces`]): the laminate's shear and yarn stiffness at
-    /// rest; zero on a mesh of triangles.
-    pub hourglass: HourglassModuli,
-    /// Density of the ply (tonne/mm^3).
-    pub density: f64,
+    pub plies: Vec<Ply>,
+    /// The plies that touch, with the friction between them (docs/model.md §6, "Ply–ply
+    /// contact"); none on a blank of one ply.
+    pub interfaces: Vec<PlyInterface>,
+    /// The ply of each element.
+    element_ply: Vec<usize>,
     /// Isothermal temperature of the run (°C).
     pub temperature: f64,
     pub constraints: Vec<Constraint>,
@@ -86,18 +121,47 @@ pub enum ModelError {
     },
     #[error("node {0} belongs to no element: it would have no mass")]
     OrphanNode(usize),
-    #[error("density {0} must be > 0")]
-    Density(f64),
+    #[error("ply '{ply}': density {density} must be > 0")]
+    Density { ply: String, density: f64 },
+    #[error("a blank needs at least one ply")]
+    NoPly,
+    #[error(
+        "ply '{ply}': its laminate has {layers} layers, the first ply's {first}: the plies' \
+         cards must have the same layers"
+    )]
+    Layers {
+        ply: String,
+        layers: usize,
+        first: usize,
+    },
     #[error("laminate at the run's temperature: {0}")]
     Material(String),
     #[error("bending: {0}")]
     Bending(#[from] BendingError),
+    #[error("interface {index} (plies {lower} and {upper}): {reason}")]
+    Interface {
+        index: usize,
+        lower: usize,
+        upper: usize,
+        reason: String,
+    },
 }
 
 impl Model {
-    /// Builds the elements of `mesh` with the warp along `warp_direction` projected on each, or
-    /// along the mesh's own per-triangle directions where it has them (a mesh file's
-    /// orientations, `Mesh::warp_directions`).
+    /// Element `k` undeformed and at rest, at the model's temperature: what the stable
+    /// step at rest and the run's estimate and checks evaluate the laminate on.
+    pub fn rest_kinematics(&self, k: usize) -> MembraneKinematics {
+        MembraneKinematics {
+            c: Matrix2::identity(),
+            c_dot: Matrix2::zeros(),
+            temperature: self.temperature,
+            fibres: self.elements[k].fibres,
+        }
+    }
+
+    /// A blank of one ply: the elements of `mesh` with the warp along `warp_direction` projected
+    /// on each, or along the mesh's own per-element directions where it has them (a mesh
+    /// file's orientations, `Mesh::warp_directions`).
     pub fn new(
         mesh: Mesh,
         laminate: Laminate,
@@ -106,81 +170,175 @@ impl Model {
         warp_direction: Vector3<f64>,
         constraints: Vec<Constraint>,
     ) -> Result<Self, ModelError> {
-        mesh.validate()?;
-        if !(density.is_finite() && density > 0.0) {
-            return Err(ModelError::Density(density));
+        let ply = PlySheet {
+            name: "ply 1".into(),
+            mesh,
+            laminate,
+            density,
+            warp_direction,
+        };
+        Self::layup(vec![ply], temperature, constraints)
+    }
+
+    /// A blank of several plies, numbered in the order given; `constraints` name nodes in the
+    /// model's numbering (the first ply's nodes first).
+    pub fn layup(
+        sheets: Vec<PlySheet>,
+        temperature: f64,
+        constraints: Vec<Constraint>,
+    ) -> Result<Self, ModelError> {
+        let first_layers = match sheets.first() {
+            Some(first) => first.laminate.layers().len(),
+            None => return Err(ModelError::NoPly),
+        };
+        let mut mesh = Mesh::default();
+        let mut elements = Vec::new();
+        let mut plies = Vec::with_capacity(sheets.len());
+        let single = sheets.len() == 1;
+        for sheet in sheets {
+            sheet.mesh.validate()?;
+            check_ply_material(&sheet, first_layers)?;
+            let sheet_elements = ply_elements(&sheet.mesh, &sheet.warp_direction, elements.len())?;
+            let hourglass = match sheet.mesh.has_quads() {
+                true => hourglass_moduli(&sheet.laminate, temperature)
+                    .map_err(|e| ModelError::Material(e.to_string()))?,
+                false => HourglassModuli::default(),
+            };
+            let nodes = mesh.nodes.len()..mesh.nodes.len() + sheet.mesh.nodes.len();
+            let element_range = elements.len()..elements.len() + sheet_elements.len();
+            let prefix = if single {
+                String::new()
+            } else {
+                format!("{}/", sheet.name)
+            };
+            mesh.append(sheet.mesh, &prefix);
+            elements.extend(sheet_elements.into_iter().map(|mut e| {
+                e.cell = e.cell.map(|n| n + nodes.start);
+                e
+            }));
+            plies.push(Ply {
+                name: sheet.name,
+                nodes,
+                elements: element_range,
+                laminate: sheet.laminate.at_temperature(temperature),
+                hourglass,
+                density: sheet.density,
+            });
         }
-        let elements = mesh
-            .cells
+        check_every_node_used(&mesh)?;
+        check_constraints(&constraints, mesh.nodes.len())?;
+        let element_ply = plies
             .iter()
             .enumerate()
-            .map(|(element, &cell)| {
-                let warp = mesh
-                    .warp_directions
-                    .as_ref()
-                    .map_or(warp_direction, |d| d[element]);
-                MembraneElement::new(cell, &mesh.nodes, &warp)
-                    .map_err(|error| ModelError::Element { element, error })
-            })
-            .collect::<Result<Vec<_>, _>>()?;
-        let mut used = vec![false; mesh.nodes.len()];
-        for t in &mesh.cells {
-            for &n in t.nodes() {
-                used[n] = true;
-            }
-        }
-        if let Some(node) = used.iter().position(|u| !u) {
-            return Err(ModelError::OrphanNode(node));
-        }
-        let hourglass = match mesh.has_quads() {
-            true => hourglass_moduli(&laminate, temperature)
-                .map_err(|e| ModelError::Material(e.to_string()))?,
-            false => HourglassModuli::default(),
-        };
-        let mut owner: Vec<Option<usize>> = vec![None; mesh.nodes.len()];
-        for (c, constraint) in constraints.iter().enumerate() {
-            for &node in &constraint.nodes {
-                if node >= owner.len() {
-                    return Err(ModelError::UnknownNode {
-                        name: constraint.name.clone(),
-                        node,
-                        nodes: owner.len(),
-                    });
-                }
-                if let Some(first) = owner[node] {
-                    return Err(ModelError::DoublyConstrained {
-                        node,
-                        first: constraints[first].name.clone(),
-                        second: constraint.name.clone(),
-                    });
-                }
-                owner[node] = Some(c);
-            }
-        }
+            .flat_map(|(i, p)| p.elements.clone().map(move |_| i))
+            .collect();
+        let thickness = plies[0].laminate.reference_thickness();
         Ok(Self {
             mesh,
             elements,
             bending: None,
             tools: Vec::new(),
             contact: ContactSettings {
-                offset: laminate.reference_thickness() / 2.0,
+                offset: thickness / 2.0,
                 penalty_scale: 0.1,
-                max_penetration: laminate.reference_thickness(),
+                max_penetration: thickness,
             },
-            hourglass,
-            // The run is isothermal: the laws' temperature tables are interpolated once here.
-            laminate: laminate.at_temperature(temperature),
-            density,
+            plies,
+            interfaces: Vec::new(),
+            element_ply,
             temperature,
             constraints,
         })
     }
 
+    /// The ply element `k` belongs to.
+    pub fn ply_of(&self, k: usize) -> &Ply {
+        &self.plies[self.element_ply[k]]
+    }
+
+    /// The laminate of element `k`.
+    pub fn laminate(&self, k: usize) -> &Laminate {
+        &self.ply_of(k).laminate
+    }
+
+    /// The reference thickness of element `k` (mm).
+    pub fn thickness(&self, k: usize) -> f64 {
+        self.laminate(k).reference_thickness()
+    }
+
+    /// The density of element `k` (tonne/mm^3).
+    pub fn density(&self, k: usize) -> f64 {
+        self.ply_of(k).density
+    }
+
+    /// The hourglass moduli of element `k`.
+    pub fn hourglass(&self, k: usize) -> &HourglassModuli {
+        &self.ply_of(k).hourglass
+    }
+
     /// The same sheet with bending stiffness: a rotation-free bending patch per triangle
     /// (docs/model.md §4, `element::bending`), the reference mesh's curvature at rest.
-    pub fn with_bending(mut self, rigidity: BendingRigidity) -> Result<Self, ModelError> {
-        self.bending = Some(Bending::new(&self.mesh, &self.elements, rigidity)?);
+    pub fn with_bending(self, rigidity: BendingRigidity) -> Result<Self, ModelError> {
+        let rigidities = vec![rigidity; self.plies.len()];
+        self.with_ply_bending(&rigidities)
+    }
+
+    /// The same blank with each ply's own bending rigidity (in the order of [`Self::plies`]).
+    pub fn with_ply_bending(mut self, rigidities: &[BendingRigidity]) -> Result<Self, ModelError> {
+        let per_element: Vec<BendingRigidity> =
+            self.element_ply.iter().map(|&p| rigidities[p]).collect();
+        self.bending = Some(Bending::new(&self.mesh, &self.elements, &per_element)?);
         Ok(self)
+    }
+
+    /// The same blank with contact and friction across `interfaces`, each between two
+    /// different plies of the blank (in the order of [`Self::plies`]), no pair twice.
+    pub fn with_interfaces(mut self, interfaces: Vec<PlyInterface>) -> Result<Self, ModelError> {
+        for (index, face) in interfaces.iter().enumerate() {
+            let refuse = |reason: String| ModelError::Interface {
+                index,
+                lower: face.lower,
+                upper: face.upper,
+                reason,
+            };
+            let plies = self.plies.len();
+            if face.lower >= plies || face.upper >= plies {
+                return Err(refuse(format!("the blank has {plies} plies")));
+            }
+            if face.lower == face.upper {
+                return Err(refuse("a ply does not touch itself".into()));
+            }
+            let taken = interfaces[..index]
+                .iter()
+                .any(|f| f.upper == face.upper || f.lower == face.lower);
+            if taken {
+                return Err(refuse(
+                    "a ply has one interface below and one above it at most".into(),
+                ));
+            }
+            face.friction.validate().map_err(refuse)?;
+        }
+        self.interfaces = interfaces;
+        Ok(self)
+    }
+
+    /// Each ply as the ply–ply contact sees it: its cells cut into triangles.
+    pub fn ply_surfaces(&self) -> Vec<PlySurface> {
+        self.plies
+            .iter()
+            .map(|ply| PlySurface {
+                nodes: ply.nodes.clone(),
+                triangles: self.elements[ply.elements.clone()]
+                    .iter()
+                    .flat_map(|e| match *e.nodes() {
+                        [a, b, c] => vec![[a, b, c]],
+                        [a, b, c, d] => vec![[a, b, c], [a, c, d]],
+                        _ => vec![],
+                    })
+                    .collect(),
+                half_thickness: 0.5 * ply.laminate.reference_thickness(),
+            })
+            .collect()
     }
 
     /// The same sheet between rigid tools, with the contact settings given.
@@ -188,6 +346,21 @@ impl Model {
         self.tools = tools;
         self.contact = contact;
         self
+    }
+
+    /// The blank's mass without mass scaling, `sum_e rho t A` (tonne).
+    pub fn physical_mass(&self) -> f64 {
+        (0..self.elements.len())
+            .map(|k| self.density(k) * self.thickness(k) * self.elements[k].area)
+            .sum()
+    }
+
+    /// The thinnest ply's reference thickness (mm).
+    pub fn thinnest_ply(&self) -> f64 {
+        self.plies
+            .iter()
+            .map(|p| p.laminate.reference_thickness())
+            .fold(f64::INFINITY, f64::min)
     }
 
     /// An equal share of the reference area of each element at each of its corners (mm^2).
@@ -219,4 +392,85 @@ fn hourglass_moduli(
         shear: laminate.shear_modulus(temperature)? * t0,
         yarn: laminate.wave_modulus(&rest, &laminate.initial_state())? * t0,
     })
+}
+
+/// The elements of one ply's `mesh`, numbered from `first` in the errors.
+fn ply_elements(
+    mesh: &Mesh,
+    warp_direction: &Vector3<f64>,
+    first: usize,
+) -> Result<Vec<MembraneElement>, ModelError> {
+    mesh.cells
+        .iter()
+        .enumerate()
+        .map(|(element, &cell)| {
+            let warp = mesh
+                .warp_directions
+                .as_ref()
+                .map_or(*warp_direction, |d| d[element]);
+            MembraneElement::new(cell, &mesh.nodes, &warp).map_err(|error| ModelError::Element {
+                element: first + element,
+                error,
+            })
+        })
+        .collect()
+}
+
+/// A positive density, and the same layers as the first ply's (the frames write per-layer
+/// arrays).
+fn check_ply_material(sheet: &PlySheet, first_layers: usize) -> Result<(), ModelError> {
+    if !(sheet.density.is_finite() && sheet.density > 0.0) {
+        return Err(ModelError::Density {
+            ply: sheet.name.clone(),
+            density: sheet.density,
+        });
+    }
+    let layers = sheet.laminate.layers().len();
+    if layers != first_layers {
+        return Err(ModelError::Layers {
+            ply: sheet.name.clone(),
+            layers,
+            first: first_layers,
+        });
+    }
+    Ok(())
+}
+
+/// Every node in some cell: a node in none would have no mass.
+fn check_every_node_used(mesh: &Mesh) -> Result<(), ModelError> {
+    let mut used = vec![false; mesh.nodes.len()];
+    for t in &mesh.cells {
+        for &n in t.nodes() {
+            used[n] = true;
+        }
+    }
+    match used.iter().position(|u| !u) {
+        Some(node) => Err(ModelError::OrphanNode(node)),
+        None => Ok(()),
+    }
+}
+
+/// Every constrained node exists and belongs to one constraint only.
+fn check_constraints(constraints: &[Constraint], nodes: usize) -> Result<(), ModelError> {
+    let mut owner: Vec<Option<usize>> = vec![None; nodes];
+    for (c, constraint) in constraints.iter().enumerate() {
+        for &node in &constraint.nodes {
+            if node >= nodes {
+                return Err(ModelError::UnknownNode {
+                    name: constraint.name.clone(),
+                    node,
+                    nodes,
+                });
+            }
+            if let Some(first) = owner[node] {
+                return Err(ModelError::DoublyConstrained {
+                    node,
+                    first: constraints[first].name.clone(),
+                    second: constraint.name.clone(),
+                });
+            }
+            owner[node] = Some(c);
+        }
+    }
+    Ok(())
 }

@@ -570,12 +570,13 @@ impl Evaluator<'_> {
         let e = &model.elements[k];
         let f = e.gradient(x);
         let step = self.step(k, start, &f);
-        let laminate = &model.laminate;
+        let ply = model.ply_of(k);
+        let laminate = &ply.laminate;
         let mut state = start.laminate_states[k].clone();
         let kin = step.kinematics(&step.c);
         let response = laminate.membrane_response(&kin, step.dt, &mut state)?;
         let mut forces = e.internal_forces(&f, &response.n);
-        let hourglass = e.hourglass_forces(x, &f, &model.hourglass, &mut forces);
+        let hourglass = e.hourglass_forces(x, &f, &ply.hourglass, &mut forces);
         let potential = e.area * laminate.incremental_potential(&kin, &state, step.dt)? + hourglass;
         Ok(ElementShare {
             forces,
@@ -613,7 +614,7 @@ impl Evaluator<'_> {
         let f = e.gradient(x);
         let step = self.step(k, start, &f);
         let d = model
-            .laminate
+            .laminate(k)
             .advanced_step_tangent(&step, &start.laminate_states[k], state)?;
         let d = 0.5 * (d + d.transpose());
         let (d, n) = match kind {
@@ -623,7 +624,7 @@ impl Evaluator<'_> {
         let mut blocks = e.stiffness(&f, &n, &d);
         if e.hourglass.is_some() {
             let exact = self.exact && kind == Tangent::Consistent;
-            let h = e.hourglass_stiffness(x, &model.hourglass, exact);
+            let h = e.hourglass_stiffness(x, model.hourglass(k), exact);
             for a in 0..4 {
                 for b in 0..4 {
                     blocks[a][b] += h[a][b];

@@ -24,8 +24,10 @@ mod newton;
 mod supernodal;
 
 use super::energy::Energies;
-use super::explicit::{elastic_energy, positive_setting, Observer, SolverError, State};
-use super::model::{Model, Motion};
+use super::error::{positive_setting, SolverError};
+use super::model::{Model, Motion, Ply};
+use super::observer::Observer;
+use super::state::State;
 use crate::contact::penalty::nodes_through_tools;
 use crate::contact::potential::{penalty_stiffness, FrictionLag};
 use crate::contact::{RigidTool, ToolMotion};
@@ -214,6 +216,13 @@ pub fn run(
     stats: &mut ImplicitStatistics,
 ) -> Result<State, SolverError> {
     check_settings(settings)?;
+    if !model.interfaces.is_empty() {
+        return Err(SolverError::Settings(
+            "the blank's plies touch one another (interfaces), and contact between plies is in \
+             the explicit solver only: run it with the explicit solver"
+                .into(),
+        ));
+    }
     let layout = layout(model, settings)?;
     let cholesky = Cholesky::analyse(&layout.pattern).map_err(SolverError::Settings)?;
     let preconditioner = Preconditioner::of(model, &layout, &cholesky, settings.iterative_from)
@@ -403,7 +412,8 @@ fn record(
     state: &mut State,
     observer: &mut dyn Observer,
 ) -> Result<(), SolverError> {
-    state.energies.elastic = elastic_energy(model, state)
+    state.energies.elastic = state
+        .elastic_energy(model)
         .map_err(|(element, e)| SolverError::Settings(format!("element {element}: {e}")))?;
     observer
         .record(model, state)
@@ -415,7 +425,52 @@ fn record(
 
 /// The unknowns, pattern, contact springs and drag of `model`.
 pub fn layout(model: &Model, settings: &ImplicitSettings) -> Result<Layout, SolverError> {
-    let laminate = &model.laminate;
+    let stiffness = model
+        .plies
+        .iter()
+        .map(|ply| ply_stiffness(model, ply))
+        .collect::<Result<Vec<_>, _>>()?;
+    let n = model.mesh.nodes.len();
+    let mut area = vec![0.0; n];
+    let mut size = vec![f64::INFINITY; n];
+    let mut ply_of_node = vec![0; n];
+    for (p, ply) in model.plies.iter().enumerate() {
+        for e in &model.elements[ply.elements.clone()] {
+            for &a in e.nodes() {
+                area[a] += e.area / e.nodes().len() as f64;
+                size[a] = size[a].min(e.altitude);
+                ply_of_node[a] = p;
+            }
+        }
+    }
+    let penalty = (0..n)
+        .map(|a| {
+            let wave = stiffness[ply_of_node[a]].0;
+            penalty_stiffness(settings.penalty_scale, wave, area[a], size[a])
+        })
+        .collect();
+    let drag = (0..n)
+        .map(|a| {
+            let (wave, shear) = stiffness[ply_of_node[a]];
+            settings.stabilisation * shear.max(1e-12 * wave) * area[a] / (size[a] * size[a])
+        })
+        .collect();
+    let mean_size = model.elements.iter().map(|e| e.area.sqrt()).sum::<f64>()
+        / model.elements.len().max(1) as f64;
+    let softest = stiffness
+        .iter()
+        .map(|&(wave, shear)| shear.max(1e-12 * wave))
+        .fold(f64::INFINITY, f64::min);
+    let mut layout = Layout::new(model, penalty, drag);
+    layout.force_floor = FORCE_FLOOR * softest * mean_size;
+    layout.length_scale = mean_size;
+    Ok(layout)
+}
+
+/// `(E t0, G t0)` of a ply at rest: its yarns' wave modulus and its in-plane shear modulus
+/// times its thickness (N/mm), what scales its contact springs and its drag.
+fn ply_stiffness(model: &Model, ply: &Ply) -> Result<(f64, f64), SolverError> {
+    let laminate = &ply.laminate;
     let t0 = laminate.reference_thickness();
     let rest = crate::material::MembraneKinematics {
         c: Matrix2::identity(),
@@ -425,33 +480,11 @@ pub fn layout(model: &Model, settings: &ImplicitSettings) -> Result<Layout, Solv
     };
     let wave = laminate
         .wave_modulus(&rest, &laminate.initial_state())
-        .map_err(|e| SolverError::Settings(e.to_string()))?
-        * t0;
+        .map_err(|e| SolverError::Settings(e.to_string()))?;
     let shear = laminate
         .shear_modulus(model.temperature)
-        .map_err(|e| SolverError::Settings(e.to_string()))?
-        * t0;
-    let n = model.mesh.nodes.len();
-    let mut area = vec![0.0; n];
-    let mut size = vec![f64::INFINITY; n];
-    for e in &model.elements {
-        for &a in e.nodes() {
-            area[a] += e.area / e.nodes().len() as f64;
-            size[a] = size[a].min(e.altitude);
-        }
-    }
-    let penalty = (0..n)
-        .map(|a| penalty_stiffness(settings.penalty_scale, wave, area[a], size[a]))
-        .collect();
-    let drag = (0..n)
-        .map(|a| settings.stabilisation * shear.max(1e-12 * wave) * area[a] / (size[a] * size[a]))
-        .collect();
-    let mean_size = model.elements.iter().map(|e| e.area.sqrt()).sum::<f64>()
-        / model.elements.len().max(1) as f64;
-    let mut layout = Layout::new(model, penalty, drag);
-    layout.force_floor = FORCE_FLOOR * shear.max(1e-12 * wave) * mean_size;
-    layout.length_scale = mean_size;
-    Ok(layout)
+        .map_err(|e| SolverError::Settings(e.to_string()))?;
+    Ok((wave * t0, shear * t0))
 }
 
 /// Entries of the tangent's factor from which its linear solves are made by conjugate
@@ -467,9 +500,9 @@ const ITERATIVE_FACTOR_ENTRIES: usize = 1_000_000;
 /// `mu lambda / eps` without cutting increments (docs/solver.md, "Friction").
 const FRICTION_STICK: f64 = 0.01;
 
-/// The elastic slip of friction's stick (mm) of `model`'s ply.
+/// The elastic slip of friction's stick (mm): a fraction of the thinnest ply.
 pub fn stick_slip(model: &Model, settings: &ImplicitSettings) -> f64 {
-    settings.friction_stick * model.laminate.reference_thickness()
+    settings.friction_stick * model.thinnest_ply()
 }
 
 /// Bytes per stored entry of the sparse tangent and of its factor: a value and a row index.
@@ -520,19 +553,16 @@ const FORCE_FLOOR: f64 = 1e-3;
 /// The model at rest at `t = 0`, with physical masses (they take no part: they are reported).
 fn rest_state(model: &Model) -> State {
     let n = model.mesh.nodes.len();
-    let thickness = model.laminate.reference_thickness();
     let mut masses = vec![0.0; n];
-    for e in &model.elements {
+    for (k, e) in model.elements.iter().enumerate() {
         for &a in e.nodes() {
-            masses[a] += model.density * thickness * e.area / e.nodes().len() as f64;
+            masses[a] += model.density(k) * model.thickness(k) * e.area / e.nodes().len() as f64;
         }
     }
-    State::undeformed(
-        model,
-        masses,
-        vec![model.density; model.elements.len()],
-        0.0,
-    )
+    let densities = (0..model.elements.len())
+        .map(|k| model.density(k))
+        .collect();
+    State::undeformed(model, masses, densities, 0.0)
 }
 
 /// Moves each force-driven tool along its force onto the blank, pressed into the contact
@@ -713,10 +743,12 @@ fn lag_normal(tool: &RigidTool, y: &Vector3<f64>) -> Vector3<f64> {
 /// performance.md).
 const CG_TOLERANCE: f64 = 1e-2;
 
-/// Conjugate-gradient iterations after which the tangent is factorised instead (measured on
-/// the 5,041-cell hemisphere: about four a solve on average, 2,408 over 576 solves, growing
-/// with the number of cells across the part; a few solves a run do not converge within this).
-const CG_ITERATIONS: usize = 40;
+/// Conjugate-gradient iterations after which the tangent is factorised instead **(choice,
+/// measured** on the hemisphere: about four a solve on average on 5,041 cells, twelve on
+/// 20,164, where a cap of 40 left 34 solves to the full factorisation, 944 MiB at the peak and
+/// 630 s of CPU, and 200 none, 544 MiB and 597 s, the same part; docs/performance.md): an
+/// iteration costs far less than that factorisation, whose factor is the run's largest array.
+const CG_ITERATIONS: usize = 200;
 
 /// Takes the converged increment into the state: positions, forces, contact, tools, energies
 /// (trapezoidal work sums as in the explicit solver), and the friction lagged for the next.

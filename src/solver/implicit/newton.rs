@@ -10,7 +10,7 @@ use super::assembly::{Evaluation, Evaluator, IncrementStart, Layout, Tangent, Tr
 use super::{contact_entry, iterative_solve, lag_normal, NotIterated};
 use super::{Converged, ImplicitSettings, ImplicitStatistics, NotConverged, Solved, Workspace};
 use crate::contact::potential::FrictionLag;
-use crate::solver::explicit::State;
+use crate::solver::state::State;
 use nalgebra::Vector3;
 use std::time::Instant;
 

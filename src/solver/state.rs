@@ -1,0 +1,132 @@
+//! The state of a run that both solvers advance and every observer, check and writer reads:
+//! positions, velocities, masses, the laminate's state variables, tool travel and loads,
+//! contact and the energy bookkeeping.
+
+use super::energy::Energies;
+use super::model::Model;
+use crate::contact::penalty::{NodeContact, ToolLoad};
+use crate::contact::ply_contact::InterplyNode;
+use crate::material::{LaminateState, MaterialError, MembraneKinematics, MembraneResponse};
+use nalgebra::{Matrix2, Vector3};
+use rayon::prelude::*;
+
+/// The integrated state at one instant.
+#[derive(Clone, Debug)]
+pub struct State {
+    pub step: usize,
+    pub time: f64,
+    /// Current positions (mm).
+    pub positions: Vec<Vector3<f64>>,
+    /// Velocities at the last half step (mm/s).
+    pub velocities: Vec<Vector3<f64>>,
+    /// Lumped nodal masses, mass scaling included (tonne).
+    pub masses: Vec<f64>,
+    /// Internal nodal forces (N).
+    pub internal_forces: Vec<Vector3<f64>>,
+    /// Reaction forces at constrained nodes, zero elsewhere (N).
+    pub reactions: Vec<Vector3<f64>>,
+    /// Membrane resultant and thickness per element.
+    pub membrane: Vec<MembraneResponse>,
+    /// Laminate state variables per element.
+    pub laminate_states: Vec<LaminateState>,
+    /// Per-element density after mass scaling (tonne/mm^3).
+    pub densities: Vec<f64>,
+    /// Step that led here (s).
+    pub time_step: f64,
+    pub energies: Energies,
+    /// Mass added by mass scaling (tonne).
+    pub added_mass: f64,
+    /// Translation of each tool from its place at the start (mm), and its velocity over the
+    /// last step (mm/s).
+    pub tool_translations: Vec<Vector3<f64>>,
+    pub tool_velocities: Vec<Vector3<f64>>,
+    /// Force of the blank on each tool at the last step (N): minus the punch force etc.
+    pub tool_loads: Vec<ToolLoad>,
+    /// Time integral of each tool's load force since the start (N·s): its difference between
+    /// two records over their time apart is the mean force in between, free of the step-to-step
+    /// ringing of the contact springs.
+    pub tool_impulses: Vec<Vector3<f64>>,
+    /// Contact of each node with the tools (force on the node, per-tool normal and
+    /// tangential forces).
+    pub contacts: Vec<NodeContact>,
+    /// Contact of each node with the plies next to its own; empty without interfaces.
+    pub interply: Vec<InterplyNode>,
+}
+
+impl State {
+    /// The undeformed model at rest at `t = 0`, with these lumped masses and element densities
+    /// (mass scaling `added_mass` included): the start of either solver.
+    pub(crate) fn undeformed(
+        model: &Model,
+        masses: Vec<f64>,
+        densities: Vec<f64>,
+        added_mass: f64,
+    ) -> State {
+        let n_nodes = model.mesh.nodes.len();
+        let elements = 0..model.elements.len();
+        State {
+            step: 0,
+            time: 0.0,
+            positions: model.mesh.nodes.clone(),
+            velocities: vec![Vector3::zeros(); n_nodes],
+            masses,
+            internal_forces: vec![Vector3::zeros(); n_nodes],
+            reactions: vec![Vector3::zeros(); n_nodes],
+            membrane: elements
+                .clone()
+                .map(|k| MembraneResponse {
+                    n: Matrix2::zeros(),
+                    thickness: model.thickness(k),
+                })
+                .collect(),
+            laminate_states: elements
+                .map(|k| model.laminate(k).initial_state())
+                .collect(),
+            densities,
+            time_step: 0.0,
+            energies: Energies::default(),
+            added_mass,
+            tool_translations: vec![Vector3::zeros(); model.tools.len()],
+            tool_velocities: vec![Vector3::zeros(); model.tools.len()],
+            tool_loads: vec![ToolLoad::default(); model.tools.len()],
+            tool_impulses: vec![Vector3::zeros(); model.tools.len()],
+            contacts: vec![NodeContact::default(); n_nodes],
+            interply: match model.interfaces.is_empty() {
+                true => Vec::new(),
+                false => vec![InterplyNode::default(); n_nodes],
+            },
+        }
+    }
+
+    /// Elastic energy stored in the sheet, `sum_e A0 sum_k t_k W_k` plus the hinges' bending
+    /// energy. The per-element energies are computed in parallel and summed in element order, so
+    /// the total is the same on any thread count (it is only needed at the records).
+    pub fn elastic_energy(&self, model: &Model) -> Result<f64, (usize, MaterialError)> {
+        let membrane: Vec<Result<f64, (usize, MaterialError)>> = model
+            .elements
+            .par_iter()
+            .enumerate()
+            .map(|(k, e)| {
+                let f = e.gradient(&self.positions);
+                let f_dot = e.gradient(&self.velocities);
+                let kin =
+                    MembraneKinematics::from_deformation(&f, &f_dot, model.temperature, e.fibres);
+                let w = model
+                    .laminate(k)
+                    .stored_energy(&kin, &self.laminate_states[k])
+                    .map_err(|err| (k, err))?;
+                Ok(e.area * w + e.hourglass_energy(&self.positions, model.hourglass(k)))
+            })
+            .collect();
+        let membrane: f64 = membrane.into_iter().sum::<Result<f64, _>>()?;
+        let bending: f64 = model.bending.as_ref().map_or(0.0, |b| {
+            let energies: Vec<f64> = b
+                .patches
+                .par_iter()
+                .map(|t| b.energy(t, &self.positions))
+                .collect();
+            energies.iter().sum()
+        });
+        Ok(membrane + bending)
+    }
+}

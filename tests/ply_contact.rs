@@ -1,0 +1,298 @@
+//! Contact and friction between plies (docs/model.md §6, "Ply–ply contact") against the
+//! friction law: a ply pulled out from between two plies pressed together by a force `N`.
+//! The outer plies are held in their plane and pressed between a fixed floor and a plate
+//! driven by `N` (both frictionless); the middle ply, longer than they are, is pulled along x
+//! by its end. Once it slides, the pull is the friction of its two faces: `2 mu N` for Coulomb
+//! friction, `2 (eta_f / h_f) v A` for the film alone (`A` the overlap's area), `2 tau_max A`
+//! once the film yields.
+
+mod common;
+
+use common::{square_plate, t300_card};
+use nalgebra::Vector3;
+use std::sync::Arc;
+use thermostamp::contact::ply_contact::{FilmFriction, PlyInterface};
+use thermostamp::contact::{ContactSettings, RigidTool, ToolMotion};
+use thermostamp::material::MaterialCard;
+use thermostamp::mesh::{rectangle, DiagonalPattern};
+use thermostamp::solver::model::PlySheet;
+use thermostamp::solver::{explicit, Constraint, Model, Motion, Observer, SolverSettings, State};
+
+/// The press force (N), the outer plies' size (mm), the pull's ramp and duration (s).
+const PRESS: f64 = 20.0;
+const OUTER: (f64, f64) = (30.0, 20.0);
+const RAMP: f64 = 0.01;
+const END: f64 = 0.05;
+
+/// A strip of `card` of `width` x 20 mm at height `z`, centred on `x0`.
+fn strip(card: &MaterialCard, width: f64, (x0, z): (f64, f64), name: &str) -> PlySheet {
+    let mut mesh = rectangle(
+        width,
+        OUTER.1,
+        (width / 2.5) as usize,
+        8,
+        DiagonalPattern::Quad,
+    );
+    for x in &mut mesh.nodes {
+        x.x += x0;
+        x.z = z;
+    }
+    PlySheet {
+        name: name.into(),
+        mesh,
+        laminate: card.laminate.clone(),
+        density: card.density,
+        warp_direction: Vector3::x(),
+    }
+}
+
+/// The three plies, the floor and the plate, `friction` on both interfaces; the middle ply's
+/// end pulled at `speed` (mm/s) after a ramp.
+fn pull_out(friction: FilmFriction, speed: f64) -> Model {
+    let card = t300_card();
+    let t = card.laminate.reference_thickness();
+    let sheets = vec![
+        strip(&card, OUTER.0, (0.0, 0.0), "bottom"),
+        strip(&card, 50.0, (8.0, t), "middle"),
+        strip(&card, OUTER.0, (0.0, 2.0 * t), "top"),
+    ];
+    let counts: Vec<usize> = sheets.iter().map(|s| s.mesh.nodes.len()).collect();
+    let (first_middle, first_top) = (counts[0], counts[0] + counts[1]);
+    let right: Vec<usize> = sheets[1]
+        .mesh
+        .node_set("right")
+        .unwrap()
+        .iter()
+        .map(|n| n + first_middle)
+        .collect();
+    let outer: Vec<usize> = (0..counts[0])
+        .chain(first_top..first_top + counts[2])
+        .collect();
+    let constraints = vec![
+        Constraint {
+            name: "outer plies in their plane".into(),
+            nodes: outer,
+            motion: Motion::Components([true, true, false]),
+        },
+        Constraint {
+            name: "pulled end".into(),
+            nodes: right,
+            motion: Motion::Velocity(Arc::new(move |time, _| {
+                Vector3::new(speed * (time / RAMP).min(1.0), 0.0, 0.0)
+            })),
+        },
+    ];
+    let floor = RigidTool::new(
+        "floor",
+        square_plate(-t / 2.0, 1.0),
+        ToolMotion::Fixed,
+        0.0,
+        t,
+    )
+    .unwrap();
+    let plate = RigidTool::new(
+        "plate",
+        square_plate(2.5 * t, -1.0),
+        ToolMotion::Force {
+            force: Vector3::new(0.0, 0.0, -PRESS),
+            mass: 1e-6,
+        },
+        0.0,
+        t,
+    )
+    .unwrap();
+    let contact = ContactSettings {
+        offset: t / 2.0,
+        penalty_scale: 0.1,
+        max_penetration: t,
+    };
+    let interfaces = vec![
+        PlyInterface {
+            lower: 0,
+            upper: 1,
+            friction,
+        },
+        PlyInterface {
+            lower: 1,
+            upper: 2,
+            friction,
+        },
+    ];
+    Model::layup(sheets, 300.0, constraints)
+        .unwrap()
+        .with_tools(vec![floor, plate], contact)
+        .with_interfaces(interfaces)
+        .unwrap()
+}
+
+/// The pull (N, along x) at each record after the ramp and the slip's start, and the deepest a
+/// node went into a neighbouring ply (mm) over the run.
+struct Pull {
+    model_pulled: Vec<usize>,
+    forces: Vec<f64>,
+    deepest: f64,
+    last: Option<State>,
+}
+
+impl Observer for Pull {
+    fn record(&mut self, model: &Model, state: &State) -> anyhow::Result<()> {
+        if state.time > 3.0 * RAMP {
+            let force: f64 = self
+                .model_pulled
+                .iter()
+                .map(|&n| state.reactions[n].x)
+                .sum();
+            self.forces.push(force);
+        }
+        let t = model.plies[0].laminate.reference_thickness();
+        let (bottom, middle) = (&model.plies[0].nodes, &model.plies[1].nodes);
+        let lowest_middle = state.positions[middle.clone()]
+            .iter()
+            .map(|x| x.z)
+            .fold(f64::INFINITY, f64::min);
+        let highest_bottom = state.positions[bottom.clone()]
+            .iter()
+            .map(|x| x.z)
+            .fold(f64::NEG_INFINITY, f64::max);
+        self.deepest = self.deepest.max(t - (lowest_middle - highest_bottom));
+        self.last = Some(state.clone());
+        Ok(())
+    }
+}
+
+/// The mean pull after the slip has set in (N), the deepest penetration (mm) and the end state.
+fn pulled(friction: FilmFriction, speed: f64) -> (f64, f64, State, Model) {
+    let model = pull_out(friction, speed);
+    let settings = SolverSettings {
+        end_time: END,
+        time_step_safety: 0.9,
+        target_time_step: Some(3e-6),
+        output_interval: END / 60.0,
+        damping: 0.0,
+        yarn_damping: 0.06,
+    };
+    let mut pull = Pull {
+        model_pulled: model.constraints[1].nodes.clone(),
+        forces: Vec::new(),
+        deepest: 0.0,
+        last: None,
+    };
+    explicit::run(&model, &settings, &mut pull).unwrap();
+    let mean = pull.forces.iter().sum::<f64>() / pull.forces.len() as f64;
+    eprintln!(
+        "pull {mean:.4} N (records {:?}), deepest {:.4} mm",
+        pull.forces
+            .iter()
+            .map(|f| (f * 1e3).round() / 1e3)
+            .collect::<Vec<_>>(),
+        pull.deepest
+    );
+    (mean, pull.deepest, pull.last.unwrap(), model)
+}
+
+#[test]
+fn coulomb_pull_out_needs_twice_mu_times_the_press_force() {
+    let mu = 0.2;
+    let (pull, deepest, state, model) = pulled(FilmFriction::coulomb(mu), 10.0);
+    let expected = 2.0 * mu * PRESS;
+    assert!(
+        (pull / expected - 1.0).abs() < 0.02,
+        "pull {pull} N against 2 mu N = {expected} N"
+    );
+    let t = model.plies[0].laminate.reference_thickness();
+    assert!(deepest < 0.1 * t, "a node {deepest} mm into its neighbour");
+    // the friction's work: the pull over the middle ply's slip, less what the contact springs
+    // hold (a few ten-thousandths of a millimetre deep)
+    let e = &state.energies;
+    let slip = 10.0 * (END - RAMP / 2.0);
+    let dissipated = -e.interply_work;
+    eprintln!(
+        "energies {e:?}; friction work {dissipated} N·mm, 2 mu N slip {}",
+        expected * slip
+    );
+    assert!(
+        (dissipated / (expected * slip) - 1.0).abs() < 0.03,
+        "friction dissipated {dissipated} N·mm over a slip of {slip} mm"
+    );
+    assert!(e.balance_error() < 0.01, "energy balance {e:?}");
+}
+
+/// The same pull-out on one thread and on two: the same bits.
+#[test]
+fn a_layup_runs_the_same_on_any_thread_count() {
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| pulled(FilmFriction::coulomb(0.2), 10.0).2)
+    };
+    let (one, two) = (run(1), run(2));
+    assert_eq!(one.positions, two.positions);
+    assert_eq!(one.reactions, two.reactions);
+    assert_eq!(one.interply, two.interply);
+    assert_eq!(one.energies, two.energies);
+}
+
+/// A Newtonian film and no Coulomb term: the pull is the film's drag, `2 (eta_f / h_f) v A`,
+/// in proportion to the speed (the drag counts the nodes over the other ply's faces, so it
+/// steps as a column of them crosses an edge of the outer plies: within 2 % of the law, and
+/// twice the speed gives twice the pull within 1 %).
+#[test]
+fn the_film_drags_in_proportion_to_the_speed() {
+    let film = FilmFriction {
+        coulomb: 0.0,
+        film: 5e-3,
+        shear_cap: f64::INFINITY,
+    };
+    let area = OUTER.0 * OUTER.1;
+    let pulls: Vec<f64> = [5.0, 10.0]
+        .iter()
+        .map(|&speed| {
+            let (pull, ..) = pulled(film, speed);
+            let expected = 2.0 * film.film * speed * area;
+            assert!(
+                (pull / expected - 1.0).abs() < 0.02,
+                "at {speed} mm/s: pull {pull} N against 2 eta v A / h = {expected} N"
+            );
+            pull
+        })
+        .collect();
+    assert!((pulls[1] / pulls[0] - 2.0).abs() < 0.02, "{pulls:?}");
+}
+
+/// The film's yield caps the shear it carries, however fast the ply is pulled: at 10 mm/s the
+/// film alone would drag 60 N, its yield allows 12 N (within 5 %: the nodes over the faces step
+/// as above).
+#[test]
+fn the_film_yields_at_its_cap() {
+    let film = FilmFriction {
+        coulomb: 0.0,
+        film: 5e-3,
+        shear_cap: 0.01,
+    };
+    let area = OUTER.0 * OUTER.1;
+    let (pull, ..) = pulled(film, 10.0);
+    let expected = 2.0 * film.shear_cap * area;
+    assert!(
+        (pull / expected - 1.0).abs() < 0.05,
+        "pull {pull} N against 2 tau_max A = {expected} N"
+    );
+}
+
+#[test]
+fn the_implicit_solver_refuses_touching_plies() {
+    let model = pull_out(FilmFriction::coulomb(0.2), 10.0);
+    let settings = thermostamp::solver::implicit::ImplicitSettings::new(END, END / 10.0);
+    let mut pull = Pull {
+        model_pulled: vec![],
+        forces: vec![],
+        deepest: 0.0,
+        last: None,
+    };
+    let mut stats = thermostamp::solver::implicit::ImplicitStatistics::default();
+    let e = thermostamp::solver::implicit::run(&model, &settings, &mut pull, &mut stats)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("explicit solver"), "{e}");
+}
