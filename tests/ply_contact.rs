@@ -13,6 +13,8 @@ use nalgebra::Vector3;
 use std::sync::Arc;
 use thermostamp::contact::ply_contact::{FilmFriction, PlyInterface};
 use thermostamp::contact::{ContactSettings, RigidTool, ToolMotion};
+use thermostamp::io::sheet_frame::sheet_frame;
+use thermostamp::io::vtk::{Field, FieldData};
 use thermostamp::material::MaterialCard;
 use thermostamp::mesh::{rectangle, DiagonalPattern};
 use thermostamp::solver::model::PlySheet;
@@ -215,6 +217,36 @@ fn coulomb_pull_out_needs_twice_mu_times_the_press_force() {
         "friction dissipated {dissipated} N·mm over a slip of {slip} mm"
     );
     assert!(e.balance_error() < 0.01, "energy balance {e:?}");
+    plies_in_the_frame(&model, &state, slip);
+}
+
+/// The frame a layup writes: each cell's ply, the plies' pressure on each node carrying both
+/// interfaces' press force (each counted once from each side), and the slip of the nodes
+/// that touched all along (the middle ply's over the outer plies, theirs under it).
+fn plies_in_the_frame(model: &Model, state: &State, slip: f64) {
+    let frame = sheet_frame(model, state).unwrap();
+    let scalar = |fields: &[Field], name: &str| -> Vec<f64> {
+        match &fields.iter().find(|f| f.name == name).unwrap().data {
+            FieldData::Scalar(v) => v.clone(),
+            _ => panic!("{name} is not a scalar"),
+        }
+    };
+    let ply = scalar(&frame.cell_data, "ply");
+    assert_eq!(ply[0], 1.0);
+    assert_eq!(ply[model.plies[2].elements.start], 3.0);
+    let pressure = scalar(&frame.point_data, "interply_pressure");
+    let pressed: f64 = pressure
+        .iter()
+        .zip(model.nodal_areas())
+        .map(|(p, a)| p * a)
+        .sum();
+    assert!(
+        (pressed / (2.0 * PRESS) - 1.0).abs() < 0.02,
+        "the plies press {pressed} N on one another"
+    );
+    let slid = scalar(&frame.point_data, "interply_slip");
+    let most = slid.iter().copied().fold(0.0, f64::max);
+    assert!((most / slip - 1.0).abs() < 0.05, "slid {most} mm of {slip}");
 }
 
 /// The same pull-out on one thread and on two: the same bits.

@@ -108,6 +108,8 @@ pub struct SideContact {
     pub tangential: Vector3<f64>,
     /// Normal force (N); 0 when apart.
     pub normal_force: f64,
+    /// How far the node has slid over the other ply while touching it, `int |v_t| dt` (mm).
+    pub slip: f64,
     /// Triangles of the other ply near the node (indices into its `triangles`).
     candidates: Vec<u32>,
 }
@@ -301,6 +303,7 @@ impl PlyContact {
             };
             s.tangential = tangential;
             s.normal_force = normal_force;
+            s.slip += slip.norm() * dt;
             pushes.push(Push {
                 node: a,
                 force: n * normal_force + tangential,

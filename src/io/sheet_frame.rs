@@ -30,7 +30,10 @@ fn in_plane(t: &Matrix3<f64>) -> [f64; 3] {
 /// each tool (mm, `gap_<tool>`). Cell data: shear angle (degrees), current warp and weft
 /// directions, thickness, membrane forces `membrane_force` (xx, yy, xy in the reference x–y
 /// axes, N/mm) and the 2nd Piola–Kirchhoff stress of each material of the stack
-/// (`stress_matrix`, `stress_fabric`: xx, yy, xy, MPa), whatever the card's stack.
+/// (`stress_matrix`, `stress_fabric`: xx, yy, xy, MPa), whatever the card's stack. A blank of
+/// several plies adds the ply of each cell (`ply`, numbered from 1 in the model's order) and,
+/// where its plies touch, the pressure of the neighbouring plies on each node
+/// (`interply_pressure`, MPa) and how far it has slid over them (`interply_slip`, mm).
 pub fn sheet_frame(model: &Model, state: &State) -> Result<SheetFrame, MaterialError> {
     let points = state.positions.iter().map(vector).collect();
     let displacement = state
@@ -56,6 +59,9 @@ pub fn sheet_frame(model: &Model, state: &State) -> Result<SheetFrame, MaterialE
     let mut point_data = point_data;
     if !model.tools.is_empty() {
         point_data.extend(contact_fields(model, state));
+    }
+    if !state.interply.is_empty() {
+        point_data.extend(interply_fields(model, state));
     }
     // every ply's laminate has the same layers (`Model::layup`)
     let n_layers = model.plies[0].laminate.layers().len();
@@ -116,6 +122,16 @@ pub fn sheet_frame(model: &Model, state: &State) -> Result<SheetFrame, MaterialE
             });
         }
     }
+    if model.plies.len() > 1 {
+        cell_data.push(Field {
+            name: "ply".into(),
+            data: FieldData::Scalar(
+                (0..model.elements.len())
+                    .map(|k| (model.ply_index(k) + 1) as f64)
+                    .collect(),
+            ),
+        });
+    }
     Ok(SheetFrame {
         points,
         point_data,
@@ -147,6 +163,33 @@ fn layer_names(laminate: &Laminate) -> Vec<Option<String>> {
 }
 
 /// Contact pressure, status and gaps of every node (see [`sheet_frame`]).
+/// The plies' contact at each node: the pressure of its neighbours on it (MPa, both sides
+/// summed) and how far it has slid over them (mm, the farther of its two sides).
+fn interply_fields(model: &Model, state: &State) -> Vec<Field> {
+    let nodal_area = model.nodal_areas();
+    let pressure = state
+        .interply
+        .iter()
+        .zip(&nodal_area)
+        .map(|(c, a)| c.sides.iter().map(|s| s.normal_force).sum::<f64>() / a)
+        .collect();
+    let slip = state
+        .interply
+        .iter()
+        .map(|c| c.sides.iter().map(|s| s.slip).fold(0.0, f64::max))
+        .collect();
+    vec![
+        Field {
+            name: "interply_pressure".into(),
+            data: FieldData::Scalar(pressure),
+        },
+        Field {
+            name: "interply_slip".into(),
+            data: FieldData::Scalar(slip),
+        },
+    ]
+}
+
 fn contact_fields(model: &Model, state: &State) -> Vec<Field> {
     let nodal_area = model.nodal_areas();
     let pressure = state

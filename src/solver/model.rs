@@ -256,6 +256,11 @@ impl Model {
         &self.plies[self.element_ply[k]]
     }
 
+    /// The index in [`Self::plies`] of the ply element `k` belongs to.
+    pub fn ply_index(&self, k: usize) -> usize {
+        self.element_ply[k]
+    }
+
     /// The laminate of element `k`.
     pub fn laminate(&self, k: usize) -> &Laminate {
         &self.ply_of(k).laminate
