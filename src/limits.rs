@@ -287,6 +287,20 @@ pub const COMPLIANCE: Range = Range::closed(
 );
 /// `eta1` of the matrix (MPa·s).
 pub const VISCOSITY: Range = Range::closed(0.0, 1e9, "MPa·s", "1e15 Pa·s is a glass, not a melt");
+/// Viscosity of the molten film between two plies (Pa·s).
+pub const FILM_VISCOSITY: Range = Range::closed(
+    0.0,
+    1e8,
+    "Pa·s",
+    "thermoplastic melts flow at 10 to 1e5 Pa·s",
+);
+/// Yield stress of the film between two plies (MPa).
+pub const FILM_YIELD: Range = Range::above(
+    0.0,
+    1e3,
+    "MPa",
+    "a molten film yields far below the 1 GPa of a solid polymer",
+);
 /// Bending rigidity per unit width (N·mm).
 pub const BENDING_RIGIDITY: Range = Range::closed(
     0.0,

@@ -280,7 +280,7 @@ fn write_force_plot(dir: &Path, records: &[FormingRecord]) -> anyhow::Result<Pat
 }
 
 /// `forming-shear-map.png`: the part in `state` from above, coloured by shear angle, under
-/// `title`.
+/// `title`; a layup's plies side by side on one colour scale, the punch's side first.
 fn write_shear_map(
     dir: &Path,
     forming: &FormingModel,
@@ -289,6 +289,17 @@ fn write_shear_map(
 ) -> anyhow::Result<PathBuf> {
     let model = &forming.model;
     let x = &state.positions;
+    let (lo, hi) = x
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+            (lo.min(p.x), hi.max(p.x))
+        });
+    let panel = 1.1 * (hi - lo);
+    let shift = |k: usize| panel * model.ply_index(k) as f64;
+    let title = match model.plies.len() {
+        1 => title,
+        n => format!("{title}; plies 1 to {n} from the punch's side, left to right"),
+    };
     let map = MapPlot {
         title,
         axes: ("x (mm)".into(), "y (mm)".into()),
@@ -301,7 +312,11 @@ fn write_shear_map(
             .mesh
             .cells
             .iter()
-            .map(|t| t.nodes().iter().map(|&n| (x[n].x, x[n].y)).collect())
+            .enumerate()
+            .map(|(k, t)| {
+                let dx = shift(k);
+                t.nodes().iter().map(|&n| (x[n].x + dx, x[n].y)).collect()
+            })
             .collect(),
         values: shear_angles(model, state)
             .into_iter()
@@ -337,7 +352,7 @@ fn print_summary(
         .map(|r| r.punch_force)
         .fold(0.0, f64::max);
     let elements = forming.model.elements.len();
-    let rows = [
+    let mut rows = vec![
         status_row(&result.outcome),
         ("scenario", scenario.origin.clone()),
         (
@@ -409,7 +424,39 @@ fn print_summary(
             ),
         ),
     ];
+    if let Some(state) = result.formed_state() {
+        rows.extend(ply_rows(&forming.model, state));
+    }
     print_checked_table(&rows, &result.checks, &forming.estimate, files);
+}
+
+/// A layup's row per ply: its largest shear angle and how far it slid over its neighbours.
+fn ply_rows(
+    model: &crate::solver::Model,
+    state: &crate::solver::State,
+) -> Vec<(&'static str, String)> {
+    if model.plies.len() < 2 {
+        return Vec::new();
+    }
+    let shear = shear_angles(model, state);
+    model
+        .plies
+        .iter()
+        .map(|ply| {
+            let largest = shear[ply.elements.clone()]
+                .iter()
+                .fold(0.0_f64, |m, g| m.max(g.abs()));
+            let slip = state.interply[ply.nodes.clone()]
+                .iter()
+                .flat_map(|c| c.sides.iter().map(|s| s.slip))
+                .fold(0.0_f64, f64::max);
+            let line = format!(
+                "{}: largest shear {largest:.1}°, slid up to {slip:.2} mm over its neighbours",
+                ply.name
+            );
+            ("ply", line)
+        })
+        .collect()
 }
 
 /// The solver, and for the implicit one its increments, iterations and time split.

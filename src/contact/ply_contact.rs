@@ -203,7 +203,7 @@ impl PlyContact {
             self.list_candidates(nodes.positions, contacts);
         }
         let this = &*self;
-        let pushes: Vec<Vec<Push>> = contacts
+        let pushes: Vec<[Option<Push>; 2]> = contacts
             .par_iter_mut()
             .enumerate()
             .map(|(a, contact)| this.node_pushes(a, nodes, dt, contact))
@@ -211,7 +211,7 @@ impl PlyContact {
         for contact in contacts.iter_mut() {
             contact.force = Vector3::zeros();
         }
-        for push in pushes.iter().flatten() {
+        for push in pushes.iter().flatten().flatten() {
             contacts[push.node].force += push.force;
             for (&c, &share) in push.corners.iter().zip(&push.shares) {
                 contacts[c].force -= push.force * share;
@@ -265,11 +265,10 @@ impl PlyContact {
         nodes: PlyNodes,
         dt: f64,
         contact: &mut InterplyNode,
-    ) -> Vec<Push> {
+    ) -> [Option<Push>; 2] {
         let p = self.node_ply[a];
-        let mut pushes = Vec::new();
-        for side in 0..2 {
-            let s = &mut contact.sides[side];
+        let mut pushes = [None, None];
+        for (side, (s, push)) in contact.sides.iter_mut().zip(&mut pushes).enumerate() {
             let found = self.across(p, side).and_then(|(other, face)| {
                 let touch = self.touch(a, (p, other, side), &s.candidates, nodes)?;
                 Some((touch, face))
@@ -304,7 +303,7 @@ impl PlyContact {
             s.tangential = tangential;
             s.normal_force = normal_force;
             s.slip += slip.norm() * dt;
-            pushes.push(Push {
+            *push = Some(Push {
                 node: a,
                 force: n * normal_force + tangential,
                 corners: touch.corners,

@@ -4,6 +4,7 @@
 pub mod advice;
 pub mod drape_preview;
 pub mod export;
+pub mod layup;
 pub mod preflight;
 pub mod run;
 pub mod scenario;

@@ -32,6 +32,17 @@ pub struct BlankSize {
 }
 
 impl BlankSize {
+    /// The size of `plies` such blanks (a layup's).
+    pub fn times(self, plies: usize) -> Self {
+        let n = plies as f64;
+        Self {
+            elements: self.elements * n,
+            quads: self.quads * n,
+            nodes: self.nodes * n,
+            ..self
+        }
+    }
+
     /// The built-in rectangle's, from the scenario's keys alone; `None` for a mesh file.
     pub fn of_rectangle(s: &Scenario) -> Option<Self> {
         let BlankShape::Rectangle {

@@ -306,16 +306,21 @@ impl BandTrend {
     }
 }
 
-/// The [`Wrinkles`] of the flange in `state`; `nodal_area` from [`Model::nodal_areas`].
+/// The [`Wrinkles`] of the flange in `state` (of a layup, of the ply against the die);
+/// `nodal_area` from [`Model::nodal_areas`].
 pub fn flange_wrinkles(f: &FormingModel, state: &State, nodal_area: &[f64]) -> Wrinkles {
     let die = &f.model.tools[f.die_tool];
     let offset = f.model.contact.offset;
     let translation = state.tool_translations[f.die_tool];
+    // of a layup, the ply against the die (the last from the punch's side)
+    let die_ply = f.model.plies.last().map_or(0..0, |p| p.nodes.clone());
     let nodes: Vec<FlangeNode> = state
         .positions
         .iter()
         .zip(nodal_area)
-        .filter(|(x, _)| f.in_flange(x))
+        .enumerate()
+        .filter(|(n, (x, _))| die_ply.contains(n) && f.in_flange(x))
+        .map(|(_, node)| node)
         .map(|(x, &area)| FlangeNode {
             distance: f.distance_from_ridge(x),
             band: f.flange_band(x),

@@ -2,10 +2,11 @@
 //! checked. Unknown keys and inconsistent values are errors that name the key; any scalar can
 //! be overridden from the command line (`--set process.temperature=310`).
 
+use crate::contact::ply_contact::FilmFriction;
 use crate::io::{from_toml_text, from_toml_value};
 use crate::limits::{
-    check_given, shown, shown_apart, ANGLE, FORCE, FRAMES, FRICTION, GAP, HISTORY_POINTS, LENGTH,
-    SHEAR_ANGLE, SPEED, TEMPERATURE, TIME_SCALING, TIME_STEP,
+    check_given, shown, shown_apart, ANGLE, FILM_VISCOSITY, FILM_YIELD, FORCE, FRAMES, FRICTION,
+    GAP, HISTORY_POINTS, LENGTH, SHEAR_ANGLE, SPEED, TEMPERATURE, TIME_SCALING, TIME_STEP,
 };
 use crate::mesh::DiagonalPattern;
 use crate::solver::SolverKind;
@@ -24,10 +25,12 @@ pub struct Scenario {
     pub output: Output,
 }
 
-/// The blank: one ply of one material card, either a rectangle meshed here or a mesh file.
+/// The blank: one ply of one material card, or a layup of plies, either a rectangle meshed
+/// here or a mesh file (every ply of a layup has the blank's outline).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Blank {
-    /// Material card (TOML), relative to the scenario file.
+    /// Material card (TOML), relative to the scenario file: the blank's, or the default of the
+    /// plies of a layup.
     pub card: PathBuf,
     pub shape: BlankShape,
     /// Warp angle (degrees): the reference direction turned by it about z.
@@ -35,6 +38,77 @@ pub struct Blank {
     /// Reference direction of the warp (global, unit), projected onto each element
     /// (`mesh::orientation`); a mesh file's own orientations take precedence.
     pub reference_direction: Vector3<f64>,
+    /// The plies of a layup (`blank.ply_angles` or `[[blank.plies]]`), from the punch's side;
+    /// `None` for the blank of one ply.
+    pub layup: Option<Layup>,
+}
+
+/// The plies of a layup and the friction between them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Layup {
+    pub plies: Vec<PlySpec>,
+    /// `blank.interply`: the friction between every two neighbouring plies.
+    pub interply: FilmFriction,
+    /// Whether the plies came as `blank.ply_angles` (the keys named in messages).
+    pub from_angles: bool,
+}
+
+/// One ply of a layup.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PlySpec {
+    pub name: String,
+    /// Its card, resolved against the scenario's folder (the blank's by default).
+    pub card: PathBuf,
+    /// Its warp angle (degrees) from the blank's reference direction.
+    pub angle: f64,
+}
+
+/// `[[blank.plies]]` as written.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PlyTable {
+    angle: f64,
+    card: Option<PathBuf>,
+    name: Option<String>,
+}
+
+/// `[blank.interply]` as written: Eq. (F1) of docs/model.md.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct InterplyTable {
+    friction: f64,
+    /// The film's viscosity (Pa·s) and thickness (mm): both or neither.
+    film_viscosity: Option<f64>,
+    film_thickness: Option<f64>,
+    /// The film's yield stress (MPa).
+    yield_stress: Option<f64>,
+}
+
+impl InterplyTable {
+    fn friction(&self) -> Result<FilmFriction, String> {
+        let film = match (self.film_viscosity, self.film_thickness) {
+            (None, None) => 0.0,
+            (Some(eta), Some(h)) if h > 0.0 => 1e-6 * eta / h,
+            (Some(_), Some(h)) => {
+                return Err(format!(
+                    "blank.interply.film_thickness = {} must be > 0",
+                    shown(h)
+                ))
+            }
+            _ => {
+                return Err(
+                    "blank.interply.film_viscosity and film_thickness go together: \
+                     give both, or neither for Coulomb friction alone"
+                        .into(),
+                )
+            }
+        };
+        Ok(FilmFriction {
+            coulomb: self.friction,
+            film,
+            shear_cap: self.yield_stress.unwrap_or(f64::INFINITY),
+        })
+    }
 }
 
 /// Where the blank's mesh comes from.
@@ -68,14 +142,18 @@ struct BlankTable {
     pattern: Option<DiagonalPattern>,
     mesh: Option<PathBuf>,
     element_set: Option<String>,
-    #[serde(default)]
-    ply_angle: f64,
+    ply_angle: Option<f64>,
     reference_direction: Option<[f64; 3]>,
+    ply_angles: Option<Vec<f64>>,
+    plies: Option<Vec<PlyTable>>,
+    interply: Option<InterplyTable>,
 }
 
 impl BlankTable {
     /// The blank, paths resolved against `folder`: a rectangle or a file, never both.
     fn resolve(self, folder: &Path) -> Result<Blank, String> {
+        let card = folder.join(&self.card);
+        let layup = self.layup(&card, folder)?;
         let shape = match self.mesh {
             Some(mesh) => {
                 let rectangle_keys = [
@@ -118,11 +196,90 @@ impl BlankTable {
             }
         };
         Ok(Blank {
-            card: folder.join(self.card),
+            card,
             shape,
-            ply_angle: self.ply_angle,
+            ply_angle: self.ply_angle.unwrap_or(0.0),
             reference_direction: unit_direction(self.reference_direction)?,
+            layup,
         })
+    }
+
+    /// The layup of `blank.ply_angles` or `[[blank.plies]]` (never both), with
+    /// `blank.interply`; `None` for one ply.
+    fn layup(&self, card: &Path, folder: &Path) -> Result<Option<Layup>, String> {
+        let plies: Vec<PlySpec> = match (&self.ply_angles, &self.plies) {
+            (Some(_), Some(_)) => {
+                return Err(
+                    "blank.ply_angles and [[blank.plies]] both give the layup: keep one \
+                     (ply_angles for one card and a list of angles, [[blank.plies]] for a card \
+                     or a name per ply)"
+                        .into(),
+                )
+            }
+            (None, None) => {
+                if self.interply.is_some() {
+                    return Err(
+                        "blank.interply is the friction between plies, and the blank \
+                         has one ply: give blank.ply_angles or [[blank.plies]], or remove it"
+                            .into(),
+                    );
+                }
+                return Ok(None);
+            }
+            (Some(angles), None) => angles
+                .iter()
+                .enumerate()
+                .map(|(i, &angle)| PlySpec {
+                    name: format!("ply {}", i + 1),
+                    card: card.to_path_buf(),
+                    angle,
+                })
+                .collect(),
+            (None, Some(tables)) => tables
+                .iter()
+                .enumerate()
+                .map(|(i, t)| PlySpec {
+                    name: t.name.clone().unwrap_or_else(|| format!("ply {}", i + 1)),
+                    card: t
+                        .card
+                        .as_ref()
+                        .map_or(card.to_path_buf(), |c| folder.join(c)),
+                    angle: t.angle,
+                })
+                .collect(),
+        };
+        let key = if self.ply_angles.is_some() {
+            "blank.ply_angles"
+        } else {
+            "blank.plies"
+        };
+        if plies.len() < 2 {
+            return Err(format!(
+                "{key} gives {} plies: a layup has two or more (a blank of one ply takes \
+                 blank.ply_angle)",
+                plies.len()
+            ));
+        }
+        if self.ply_angle.is_some() {
+            return Err(format!(
+                "blank.ply_angle is the angle of a blank of one ply; {key} gives each ply's: \
+                 remove blank.ply_angle"
+            ));
+        }
+        for (i, a) in plies.iter().enumerate() {
+            if plies[..i].iter().any(|b| b.name == a.name) {
+                return Err(format!("blank.plies: two plies are named \"{}\"", a.name));
+            }
+        }
+        let interply = self.interply.as_ref().ok_or(
+            "a layup needs blank.interply.friction, the Coulomb friction between its plies \
+             (docs/model.md, \"Friction through the molten film\")",
+        )?;
+        Ok(Some(Layup {
+            plies,
+            interply: interply.friction()?,
+            from_angles: self.ply_angles.is_some(),
+        }))
     }
 }
 
@@ -486,6 +643,15 @@ impl Scenario {
         ] {
             make_absolute(&mut table, keys, &folder);
         }
+        let plies = table
+            .get_mut("blank")
+            .and_then(|b| b.get_mut("plies"))
+            .and_then(toml::Value::as_array_mut);
+        for ply in plies.into_iter().flatten() {
+            if let Some(ply) = ply.as_table_mut() {
+                make_absolute(ply, &["card"], &folder);
+            }
+        }
         toml::to_string(&table).map_err(|e| error(e.to_string()))
     }
 
@@ -602,11 +768,45 @@ impl Scenario {
             ]),
             ToolSet::Files(f) => given.push(("tools.flange_radius", f.flange_radius, LENGTH)),
         }
-        check_given(given)
+        check_given(given)?;
+        self.check_layup_ranges()
+    }
+
+    /// The layup's angles and the film's values within their ranges, each named by its key.
+    fn check_layup_ranges(&self) -> Result<(), String> {
+        let Some(layup) = &self.blank.layup else {
+            return Ok(());
+        };
+        for (i, ply) in layup.plies.iter().enumerate() {
+            let key = match layup.from_angles {
+                true => format!("blank.ply_angles[{}]", i + 1),
+                false => format!("blank.plies[{}].angle", i + 1),
+            };
+            ANGLE.check(&key, ply.angle)?;
+        }
+        let f = &layup.interply;
+        FRICTION.check("blank.interply.friction", f.coulomb)?;
+        FILM_VISCOSITY.check(
+            "blank.interply.film_viscosity (over its thickness)",
+            f.film * 1e6,
+        )?;
+        if f.shear_cap.is_finite() {
+            FILM_YIELD.check("blank.interply.yield_stress", f.shear_cap)?;
+        }
+        Ok(())
     }
 
     fn check_process(&self) -> Result<(), String> {
         let p = &self.process;
+        if let (Some(layup), SolverKind::Implicit) = (&self.blank.layup, p.solver) {
+            return Err(format!(
+                "a layup ({} plies) is formed by the explicit solver only: the contact between \
+                 plies is not yet in the implicit solver. Set process.solver = \"explicit\", \
+                 with process.time_scaling and process.target_time_step (see \
+                 examples/hemisphere-layup.toml)",
+                layup.plies.len()
+            ));
+        }
         if p.solver == SolverKind::Implicit {
             let explicit_only = [
                 ("process.time_scaling", p.time_scaling != 1.0),

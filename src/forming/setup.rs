@@ -7,6 +7,7 @@
 //! blank at the start; tools read from files are used where the files put them.
 
 use super::export::FORMED_INP;
+use super::layup;
 use super::preflight;
 use super::scenario::{BlankShape, Scenario, SetKind, ToolFile, ToolFiles, ToolSet, Tools};
 use crate::contact::{
@@ -82,14 +83,22 @@ impl FormingModel {
         let card = MaterialCard::load(&s.blank.card).map_err(|e| e.to_string())?;
         card.check_temperature("process.temperature", s.process.temperature)
             .map_err(|e| format!("{}: {e} ({})", s.origin, s.blank.card.display()))?;
-        let keyed = preflight::BlankSize::of_rectangle(s);
+        let ply_cards = match &s.blank.layup {
+            Some(l) => Some(layup::ply_cards(s, l)?),
+            None => None,
+        };
+        let plies = ply_cards.as_ref().map_or(1, Vec::len);
+        let keyed = preflight::BlankSize::of_rectangle(s).map(|b| b.times(plies));
         if let Some(size) = keyed {
             early(&preflight::estimate_from_keys(s, &card, size)?);
         }
-        let thickness = card.laminate.reference_thickness();
+        // the ply's, and the stack's that the tools are placed for
+        let ply_thickness = ply_cards.as_ref().map_or(&card, |c| &c[0]);
+        let ply_thickness = ply_thickness.laminate.reference_thickness();
+        let thickness = ply_thickness * plies as f64;
         let (mesh, mut notes) = blank_mesh(s)?;
         if keyed.is_none() {
-            let size = preflight::BlankSize::of_mesh(&mesh);
+            let size = preflight::BlankSize::of_mesh(&mesh).times(plies);
             early(&preflight::estimate_from_keys(s, &card, size)?);
         }
         let element_size = match s.blank.shape {
@@ -105,6 +114,14 @@ impl FormingModel {
             ToolSet::Files(_) => 0.0,
         };
         let warp = reference_warp(s.blank.reference_direction, s.blank.ply_angle);
+        if mesh.warp_directions.is_some() && s.blank.layup.is_some() {
+            return Err(format!(
+                "{}: the blank's mesh file gives the warp direction of every element, and a \
+                 layup turns each ply's by its own angle: remove the file's orientations \
+                 (*ORIENTATION) and give the angles in blank.ply_angles or [[blank.plies]]",
+                s.origin
+            ));
+        }
         if mesh.warp_directions.is_some() && s.blank.ply_angle != 0.0 {
             return Err(format!(
                 "{}: the blank's mesh file gives the warp direction of every element; \
@@ -131,16 +148,19 @@ impl FormingModel {
         preflight::check_holder_pressure(s, mesh.total_area())?;
         let blank_mass = card.density * thickness * mesh.total_area();
         let p = &s.process;
-        let mut model = Model::new(
-            mesh,
-            card.laminate.time_scaled(p.time_scaling),
-            card.density,
-            p.temperature,
-            warp,
-            constraints,
-        )
-        .map_err(|e| e.to_string())?;
-        if let Some(bending) = &card.bending {
+        let mut model = match (&s.blank.layup, &ply_cards) {
+            (Some(l), Some(cards)) => layup::layup_model(s, l, cards, &mesh, &constraints)?,
+            _ => Model::new(
+                mesh,
+                card.laminate.time_scaled(p.time_scaling),
+                card.density,
+                p.temperature,
+                warp,
+                constraints,
+            )
+            .map_err(|e| e.to_string())?,
+        };
+        if let (Some(bending), None) = (&card.bending, &s.blank.layup) {
             let rigidity = bending
                 .at(p.temperature)
                 .map_err(|e| format!("process.temperature: {e}"))?;
@@ -156,14 +176,14 @@ impl FormingModel {
             ToolSet::BuiltIn(t) => built_in_tool_set(s, t, (thickness, reach), punch, blank_mass)?,
             ToolSet::Files(f) => {
                 let set = file_tool_set(s, f, (thickness, blank_mass), punch, &mut notes)?;
-                check_start_positions(&model, &set.0, thickness)?;
+                check_start_positions(&model, &set.0, ply_thickness)?;
                 set
             }
         };
         let contact = ContactSettings {
-            offset: 0.5 * thickness,
+            offset: 0.5 * ply_thickness,
             penalty_scale: PENALTY_SCALE,
-            max_penetration: thickness,
+            max_penetration: ply_thickness,
         };
         let model = model.with_tools(tools, contact);
         let end_time = punch.time_to(p.stroke);

@@ -1,0 +1,186 @@
+//! Layups from the scenario file (docs/forming.md, "Layups"): two plies free to slide on one
+//! another form as one ply each; the tutorial runs in a reduced form; bad layups are refused
+//! before the first step, naming the key.
+
+mod common;
+
+use common::{scratch_dir, thermostamp};
+use thermostamp::forming::run::{run, shear_angles};
+use thermostamp::forming::{FormingModel, Scenario};
+
+/// The hemisphere on 10 mm cells pressed 6 mm, every tool frictionless (the holder's 200 N then
+/// only holds the flange flat), explicit.
+const REDUCED: [&str; 7] = [
+    "blank.element_size=10",
+    "process.stroke=6",
+    "process.friction.punch=0",
+    "process.friction.die=0",
+    "process.friction.holder=0",
+    "output.history_points=6",
+    "output.frames=0",
+];
+
+fn formed(path: &str, extra: &[&str]) -> (FormingModel, Vec<f64>, f64) {
+    let overrides: Vec<String> = REDUCED.iter().chain(extra).map(|s| s.to_string()).collect();
+    let scenario = Scenario::load(&common::repo_path(path), &overrides).unwrap();
+    let forming = FormingModel::new(&scenario).unwrap();
+    let result = run(&forming, None, None);
+    let state = result.outcome.as_ref().unwrap();
+    let shear = shear_angles(&forming.model, state);
+    let force = result.records.last().unwrap().punch_force;
+    (forming, shear, force)
+}
+
+/// Two plies of one card at one angle with no friction between them carry the press as two
+/// single plies: each ply's shear within 0.5° of the single ply's at every element, and the
+/// punch force twice the single ply's within 3 % (with frictionless tools the force is the
+/// plies' own resistance, which two plies have twice).
+#[test]
+fn two_plies_free_to_slide_form_as_two_single_plies() {
+    let (one, single_shear, single_force) = formed("tests/data/hemisphere-explicit.toml", &[]);
+    let (two, pair_shear, pair_force) = formed(
+        "examples/hemisphere-layup.toml",
+        &["blank.ply_angles=[0.0, 0.0]", "blank.interply.friction=0"],
+    );
+    let cells = one.model.elements.len();
+    assert_eq!(two.model.elements.len(), 2 * cells);
+    for (p, ply) in two.model.plies.iter().enumerate() {
+        let worst = pair_shear[ply.elements.clone()]
+            .iter()
+            .zip(&single_shear)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        eprintln!(
+            "ply {}: shear within {worst:.3}° of the single ply's",
+            p + 1
+        );
+        assert!(worst < 0.5, "ply {}: {worst}°", p + 1);
+    }
+    eprintln!("punch force {pair_force:.3} N against twice {single_force:.3} N");
+    assert!(
+        (pair_force / (2.0 * single_force) - 1.0).abs() < 0.03,
+        "{pair_force} N against 2 x {single_force} N"
+    );
+}
+
+/// examples/hemisphere-layup.toml on 10 mm cells over 3 mm of stroke: it reaches the stroke,
+/// sums up each ply, draws the plies side by side and writes the plies' fields.
+#[test]
+fn layup_example_runs_in_reduced_form() {
+    let dir = scratch_dir("layup", "example");
+    let out = dir.join("out");
+    let out = out.to_str().unwrap();
+    let output = thermostamp(&[
+        "run",
+        "examples/hemisphere-layup.toml",
+        "--set",
+        "blank.element_size=10",
+        "--set",
+        "process.stroke=3",
+        "--set",
+        "output.history_points=3",
+        "--set",
+        "output.frames=1",
+        "--output",
+        out,
+    ]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{stderr}");
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(
+        stdout.contains("stroke reached              3.00 mm"),
+        "{stdout}"
+    );
+    for ply in 1..=4 {
+        assert!(
+            stdout.contains(&format!("ply {ply}: largest shear")),
+            "{stdout}"
+        );
+    }
+    let vtu = std::fs::read_to_string(dir.join("out").join("formed-blank.vtu")).unwrap();
+    for array in [
+        "Name=\"ply\"",
+        "Name=\"interply_pressure\"",
+        "Name=\"interply_slip\"",
+    ] {
+        assert!(vtu.contains(array), "{array} missing");
+    }
+    assert!(dir.join("out").join("forming-shear-map.png").exists());
+    formed_layup_runs_in_calculix(&dir);
+}
+
+/// The layup's `formed-blank.inp` (a shell per ply, each ply's sets named `ply N/set`) in
+/// CalculiX: the first ply's `left` edge clamped, 1 N a node on its `right` edge along z; the
+/// reaction on the clamped edge is the load applied.
+fn formed_layup_runs_in_calculix(dir: &std::path::Path) {
+    let found = std::process::Command::new("ccx").arg("-v").output().is_ok();
+    if !common::reader_available(
+        found,
+        "layup_example_runs_in_reduced_form",
+        "CalculiX (ccx)",
+    ) {
+        return;
+    }
+    let deck = std::fs::read_to_string(dir.join("out").join("formed-blank.inp")).unwrap();
+    let right = deck
+        .lines()
+        .skip_while(|l| *l != "*NSET, NSET=\"ply 1/right\"")
+        .skip(1)
+        .take_while(|l| !l.starts_with('*'))
+        .flat_map(|l| l.split(','))
+        .count();
+    assert!(right > 0, "no set ply 1/right in the deck");
+    std::fs::write(dir.join("formed-blank.inp"), &deck).unwrap();
+    std::fs::write(
+        dir.join("job.inp"),
+        "*INCLUDE, INPUT=formed-blank.inp\n*MATERIAL, NAME=PREPREG\n*ELASTIC\n10000.0, 0.3\n\
+         *BOUNDARY\n\"ply 1/left\", 1, 6\n*STEP\n*STATIC\n*CLOAD\n\"ply 1/right\", 3, 1.0\n\
+         *NODE PRINT, NSET=\"ply 1/left\", TOTALS=ONLY\nRF\n*END STEP\n",
+    )
+    .unwrap();
+    let out = std::process::Command::new("ccx")
+        .args(["-i", "job"])
+        .current_dir(dir)
+        .env("OMP_NUM_THREADS", "1")
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("Job finished"), "{stdout}");
+    assert!(
+        !stdout.contains("*WARNING") && !stdout.contains("*ERROR"),
+        "{stdout}"
+    );
+    let dat = std::fs::read_to_string(dir.join("job.dat")).unwrap();
+    let fz: f64 = dat
+        .lines()
+        .skip_while(|l| !l.contains("total force"))
+        .find_map(|l| l.split_whitespace().nth(2).and_then(|f| f.parse().ok()))
+        .unwrap();
+    assert!(
+        (fz + right as f64).abs() < 1e-6,
+        "reaction {fz} N for {right} N applied"
+    );
+}
+
+/// Bad layups are refused before any step with exit code 2, the message naming the key.
+#[test]
+fn bad_layups_are_refused_naming_the_key() {
+    let cases: [(&str, &str); 7] = [
+        ("process.solver=implicit", "explicit solver only"),
+        ("blank.interply.friction=-1", "blank.interply.friction"),
+        ("blank.ply_angles=[0.0]", "two or more"),
+        ("blank.ply_angle=10", "remove blank.ply_angle"),
+        ("blank.interply.film_viscosity=100", "go together"),
+        ("blank.ply_angles=[0.0, 400.0]", "blank.ply_angles[2]"),
+        (
+            "blank.interply.yield_stress=0",
+            "blank.interply.yield_stress",
+        ),
+    ];
+    for (set, expected) in cases {
+        let output = thermostamp(&["run", "examples/hemisphere-layup.toml", "--set", set]);
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(2), "--set {set}: {stderr}");
+        assert!(stderr.contains(expected), "--set {set}: {stderr}");
+    }
+}
