@@ -296,13 +296,16 @@ fn write_shear_map(
         });
     let panel = 1.1 * (hi - lo);
     let shift = |k: usize| panel * model.ply_index(k) as f64;
-    let title = match model.plies.len() {
-        1 => title,
-        n => format!("{title}; plies 1 to {n} from the punch's side, left to right"),
+    let (title, x_axis) = match model.plies.len() {
+        1 => (title, "x (mm)".to_string()),
+        n => (
+            format!("{title}; plies 1 to {n} from the punch's side, left to right"),
+            format!("x (mm), ply k drawn (k - 1) x {panel:.0} mm to the right"),
+        ),
     };
     let map = MapPlot {
         title,
-        axes: ("x (mm)".into(), "y (mm)".into()),
+        axes: (x_axis, "y (mm)".into()),
         equal_scales: true,
         value_label: match locking_angle {
             Some(l) => format!("|shear angle| (°), locking {l}° marked"),
