@@ -200,7 +200,7 @@ impl Model {
             check_ply_material(&sheet, first_layers)?;
             let sheet_elements = ply_elements(&sheet.mesh, &sheet.warp_direction, elements.len())?;
             let hourglass = match sheet.mesh.has_quads() {
-                true => hourglass_moduli(&sheet.laminate, temperature)
+                true => rest_moduli(&sheet.laminate, temperature)
                     .map_err(|e| ModelError::Material(e.to_string()))?,
                 false => HourglassModuli::default(),
             };
@@ -382,7 +382,7 @@ impl Model {
 
 /// `G t0` and `E t0` of the laminate at rest at `temperature` (`E` its wave modulus along a
 /// yarn, what sets the stable step).
-fn hourglass_moduli(
+pub(crate) fn rest_moduli(
     laminate: &Laminate,
     temperature: f64,
 ) -> Result<HourglassModuli, MaterialError> {

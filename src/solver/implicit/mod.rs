@@ -25,7 +25,7 @@ mod supernodal;
 
 use super::energy::Energies;
 use super::error::{positive_setting, SolverError};
-use super::model::{Model, Motion, Ply};
+use super::model::{rest_moduli, Model, Motion, Ply};
 use super::observer::Observer;
 use super::state::State;
 use crate::contact::penalty::nodes_through_tools;
@@ -467,24 +467,12 @@ pub fn layout(model: &Model, settings: &ImplicitSettings) -> Result<Layout, Solv
     Ok(layout)
 }
 
-/// `(E t0, G t0)` of a ply at rest: its yarns' wave modulus and its in-plane shear modulus
-/// times its thickness (N/mm), what scales its contact springs and its drag.
+/// `(E t0, G t0)` of a ply at rest (its hourglass moduli, whether or not its cells are
+/// quadrilaterals): what scales its contact springs and its drag.
 fn ply_stiffness(model: &Model, ply: &Ply) -> Result<(f64, f64), SolverError> {
-    let laminate = &ply.laminate;
-    let t0 = laminate.reference_thickness();
-    let rest = crate::material::MembraneKinematics {
-        c: Matrix2::identity(),
-        c_dot: Matrix2::zeros(),
-        temperature: model.temperature,
-        fibres: Default::default(),
-    };
-    let wave = laminate
-        .wave_modulus(&rest, &laminate.initial_state())
+    let rest = rest_moduli(&ply.laminate, model.temperature)
         .map_err(|e| SolverError::Settings(e.to_string()))?;
-    let shear = laminate
-        .shear_modulus(model.temperature)
-        .map_err(|e| SolverError::Settings(e.to_string()))?;
-    Ok((wave * t0, shear * t0))
+    Ok((rest.yarn, rest.shear))
 }
 
 /// Entries of the tangent's factor from which its linear solves are made by conjugate
