@@ -61,12 +61,13 @@ fn main() {
             &mut ImplicitStatistics::default(),
         )
         .expect("10 mm of stroke");
-        let layout = implicit::layout(model, &settings).expect("layout");
+        let layout = implicit::layout(model, &settings, &[]).expect("layout");
         let evaluator = Evaluator {
             model,
             layout: &layout,
             exact: settings.exact_tangent,
             stick_slip: implicit::stick_slip(model, &settings),
+            plies: None,
         };
         let strains: Vec<Matrix2<f64>> = model
             .elements
@@ -85,6 +86,9 @@ fn main() {
             velocities: &pressed.velocities,
             masses: &pressed.masses,
             dt: settings.output_interval,
+            ply_lags: &[],
+            ply_lists: &[],
+            ply_faces: &[],
         };
         // the next increment's first trial: every node a little farther along its way
         let positions: Vec<_> = pressed

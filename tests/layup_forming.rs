@@ -165,8 +165,7 @@ fn formed_layup_runs_in_calculix(dir: &std::path::Path) {
 /// Bad layups are refused before any step with exit code 2, the message naming the key.
 #[test]
 fn bad_layups_are_refused_naming_the_key() {
-    let cases: [(&str, &str); 7] = [
-        ("process.solver=implicit", "explicit solver only"),
+    let cases: [(&str, &str); 6] = [
         ("blank.interply.friction=-1", "blank.interply.friction"),
         ("blank.ply_angles=[0.0]", "two or more"),
         ("blank.ply_angle=10", "remove blank.ply_angle"),

@@ -4,6 +4,7 @@
 pub mod blended_surface;
 pub mod penalty;
 pub mod ply_contact;
+pub mod ply_potential;
 pub mod potential;
 pub mod rigid_tool;
 pub mod stl;

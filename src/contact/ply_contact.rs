@@ -114,6 +114,13 @@ pub struct SideContact {
     candidates: Vec<u32>,
 }
 
+impl SideContact {
+    /// The triangles of the other ply listed near the node.
+    pub fn candidates(&self) -> &[u32] {
+        &self.candidates
+    }
+}
+
 /// A node's contact with its neighbouring plies: the force they put on it (its own contacts
 /// and its share of the contacts of the other ply's nodes on its faces), and its side below
 /// (`sides[0]`, against the ply under it) and above (`sides[1]`).
@@ -219,6 +226,59 @@ impl PlyContact {
         }
     }
 
+    /// Lists the faces near every node again where a node has moved half the margin since they
+    /// were made (into `contacts`); whether they were.
+    pub fn relist_if_moved(
+        &mut self,
+        positions: &[Vector3<f64>],
+        contacts: &mut [InterplyNode],
+    ) -> bool {
+        let moved = self.needs_listing(positions);
+        if moved {
+            self.list_candidates(positions, contacts);
+        }
+        moved
+    }
+
+    /// The overlap of two plies beyond which a node went through (mm).
+    pub fn max_penetration(&self) -> f64 {
+        self.max_penetration
+    }
+
+    /// Each node's share of its ply's area (mm^2).
+    pub fn area(&self, a: usize) -> f64 {
+        self.areas[a]
+    }
+
+    /// The interface across side `side` (0 below, 1 above) of node `a`'s ply, if any.
+    pub fn interface(&self, a: usize, side: usize) -> Option<&PlyInterface> {
+        self.across(self.node_ply[a], side).map(|(_, face)| face)
+    }
+
+    /// The node pairs the contact may couple while the lists hold: each node with every
+    /// corner of the triangles listed near it.
+    pub fn listed_pairs(&self, contacts: &[InterplyNode]) -> Vec<[usize; 2]> {
+        let mut pairs = Vec::new();
+        for (a, contact) in contacts.iter().enumerate() {
+            let p = self.node_ply[a];
+            for (side, s) in contact.sides.iter().enumerate() {
+                let Some((other, _)) = self.across(p, side) else {
+                    continue;
+                };
+                let triangles = &self.plies[other].triangles;
+                let mut corners: Vec<usize> = s
+                    .candidates
+                    .iter()
+                    .flat_map(|&t| triangles[t as usize])
+                    .collect();
+                corners.sort_unstable();
+                corners.dedup();
+                pairs.extend(corners.into_iter().map(|c| [a, c]));
+            }
+        }
+        pairs
+    }
+
     /// Whether a node has moved half the margin since the lists were made.
     fn needs_listing(&self, positions: &[Vector3<f64>]) -> bool {
         self.listed_at.len() != positions.len()
@@ -269,8 +329,8 @@ impl PlyContact {
         let p = self.node_ply[a];
         let mut pushes = [None, None];
         for (side, (s, push)) in contact.sides.iter_mut().zip(&mut pushes).enumerate() {
-            let found = self.across(p, side).and_then(|(other, face)| {
-                let touch = self.touch(a, (p, other, side), &s.candidates, nodes)?;
+            let found = self.across(p, side).and_then(|(_, face)| {
+                let touch = self.touch(a, side, &s.candidates, nodes)?;
                 Some((touch, face))
             });
             let Some((touch, face)) = found else {
@@ -313,32 +373,65 @@ impl PlyContact {
         pushes
     }
 
-    /// Where node `a` of ply `p` presses into ply `other` across `side`: the nearest of its
-    /// listed triangles, if the node is within the reach of its face.
-    fn touch(
+    /// Where node `a` presses into the ply across `side`: [`Self::nearest`], within the reach
+    /// of the penalty (not beyond `max_penetration`, where the node went through).
+    fn touch(&self, a: usize, side: usize, candidates: &[u32], nodes: PlyNodes) -> Option<Touch> {
+        self.nearest(a, side, candidates, nodes.positions)
+            .filter(|t| t.gap < 0.0 && t.gap > -self.max_penetration)
+    }
+
+    /// The nearest point to node `a` on the ply across `side` among its listed triangles
+    /// `candidates`, with the gap between the two plies' faces there: over a face the height
+    /// of the node above it, off it (beyond the ply's edge, or over a convex fold) the distance
+    /// to the nearest edge or corner, and only from the node's own side (`None` from the other,
+    /// or without a ply across).
+    pub fn nearest(
         &self,
         a: usize,
-        (p, other, side): (usize, usize, usize),
+        side: usize,
         candidates: &[u32],
-        nodes: PlyNodes,
+        positions: &[Vector3<f64>],
     ) -> Option<Touch> {
-        let x = nodes.positions[a];
-        let sign = if side == 0 { 1.0 } else { -1.0 };
-        let offset = self.plies[p].half_thickness + self.plies[other].half_thickness;
+        let p = self.node_ply[a];
+        let (other, _) = self.across(p, side)?;
+        let x = positions[a];
         let triangles = &self.plies[other].triangles;
-        let (best, (point, feature)) = candidates
+        let (best, (_, feature)) = candidates
             .iter()
             .map(|&t| {
                 let [i, j, k] = triangles[t as usize];
-                let (pi, pj, pk) = (nodes.positions[i], nodes.positions[j], nodes.positions[k]);
+                let (pi, pj, pk) = (positions[i], positions[j], positions[k]);
                 (t as usize, closest_feature_on_triangle(&x, &pi, &pj, &pk))
             })
             .min_by(|(_, (p, _)), (_, (q, _))| {
                 (p - x).norm_squared().total_cmp(&(q - x).norm_squared())
             })?;
-        let corners = triangles[best];
-        let [pi, pj, pk] = corners.map(|c| nodes.positions[c]);
+        let over_face = matches!(feature, Feature::Face);
+        self.touch_on(a, side, (triangles[best], over_face), positions)
+    }
+
+    /// [`Self::nearest`] on the one triangle `corners` of the ply across `side`: over its face
+    /// (`over_face`), the height of node `a` above the triangle's plane, wherever the node has
+    /// slid to over it (so the gap is smooth while the triangle is held); otherwise the distance
+    /// to its nearest edge or corner, from the node's own side only.
+    pub fn touch_on(
+        &self,
+        a: usize,
+        side: usize,
+        (corners, over_face): ([usize; 3], bool),
+        positions: &[Vector3<f64>],
+    ) -> Option<Touch> {
+        let p = self.node_ply[a];
+        let (other, _) = self.across(p, side)?;
+        let x = positions[a];
+        let sign = if side == 0 { 1.0 } else { -1.0 };
+        let offset = self.plies[p].half_thickness + self.plies[other].half_thickness;
+        let [pi, pj, pk] = corners.map(|c| positions[c]);
         let normal = (pj - pi).cross(&(pk - pi)).normalize() * sign;
+        let (point, feature) = match over_face {
+            true => (x - normal * (x - pi).dot(&normal), Feature::Face),
+            false => closest_feature_on_triangle(&x, &pi, &pj, &pk),
+        };
         let apart = x - point;
         let height = apart.dot(&normal);
         // over a face the gap is the height; off it (beyond the ply's edge, or over a convex
@@ -348,25 +441,30 @@ impl PlyContact {
             _ if height > 0.0 => (apart.norm() - offset, apart.normalize()),
             _ => return None,
         };
-        if gap >= 0.0 || gap <= -self.max_penetration {
-            return None;
-        }
         Some(Touch {
             gap,
             direction,
             corners,
             shares: barycentric(&point, [&pi, &pj, &pk]),
+            over_face: matches!(feature, Feature::Face),
         })
     }
 }
 
-/// Node `a` pressing into a face.
-struct Touch {
-    gap: f64,
+/// Node `a` over the faces of a neighbouring ply: the gap between the two plies' faces there
+/// (mm, negative where they overlap; the gradient of the gap in the node's position is
+/// `direction`, in a corner's position `-share direction`), the triangle's corners and the
+/// nearest point's barycentric coordinates in it (outside `[0, 1]` where the node has slid
+/// beyond a triangle held over its plane).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Touch {
+    pub gap: f64,
     /// Unit, from the face towards the node's side.
-    direction: Vector3<f64>,
-    corners: [usize; 3],
-    shares: [f64; 3],
+    pub direction: Vector3<f64>,
+    pub corners: [usize; 3],
+    pub shares: [f64; 3],
+    /// Whether the nearest point lies within the triangle's face (not on an edge or corner).
+    pub over_face: bool,
 }
 
 /// The barycentric coordinates of `p` (on the triangle) in triangle `[a, b, c]`.

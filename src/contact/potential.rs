@@ -140,10 +140,10 @@ pub fn pair_contact(
 
 /// The friction part of a pair's potential: energy (N·mm, zero where the increment starts),
 /// gradient (N) and Hessian (N/mm).
-struct FrictionPart {
-    energy: f64,
-    gradient: Vector3<f64>,
-    hessian: Matrix3<f64>,
+pub(crate) struct FrictionPart {
+    pub energy: f64,
+    pub gradient: Vector3<f64>,
+    pub hessian: Matrix3<f64>,
 }
 
 /// Coulomb's friction with an elastic stick of slip `eps` at `y` (module docs): the trial
@@ -151,7 +151,12 @@ struct FrictionPart {
 /// in the stick and `k (mu lambda / |z|) (P0 - z z^T / |z|^2)` in the slip: the slope of the
 /// force along the slip drops to zero as the node starts sliding (a kink Newton's method meets
 /// as it meets the contact's).
-fn stick_slip(f: &FrictionLag, y: &Vector3<f64>, eps: f64, with_hessian: bool) -> FrictionPart {
+pub(crate) fn stick_slip(
+    f: &FrictionLag,
+    y: &Vector3<f64>,
+    eps: f64,
+    with_hessian: bool,
+) -> FrictionPart {
     let radius = f.limit;
     let k = radius / eps;
     let projector = Matrix3::identity() - f.normal * f.normal.transpose();

@@ -798,15 +798,6 @@ impl Scenario {
 
     fn check_process(&self) -> Result<(), String> {
         let p = &self.process;
-        if let (Some(layup), SolverKind::Implicit) = (&self.blank.layup, p.solver) {
-            return Err(format!(
-                "a layup ({} plies) is formed by the explicit solver only: the contact between \
-                 plies is not yet in the implicit solver. Set process.solver = \"explicit\", \
-                 with process.time_scaling and process.target_time_step (see \
-                 examples/hemisphere-layup.toml)",
-                layup.plies.len()
-            ));
-        }
         if p.solver == SolverKind::Implicit {
             let explicit_only = [
                 ("process.time_scaling", p.time_scaling != 1.0),

@@ -17,7 +17,7 @@ use super::observer::Observer;
 use super::state::State;
 use super::yarn_damping::{step_reduction, yarn_damping_resultant};
 use crate::contact::penalty::{self, Nodes};
-use crate::contact::ply_contact::{PlyContact, PlyNodes};
+use crate::contact::ply_contact::PlyNodes;
 use crate::element::Bending;
 use crate::material::{MaterialError, MembraneKinematics, StepModuli};
 use nalgebra::Vector3;
@@ -132,7 +132,7 @@ pub fn run(
     let prescribed = prescribed_motion(model);
     let mut state = initial_state(model, settings)?;
     let zeros = vec![Vector3::zeros(); model.mesh.nodes.len()];
-    let mut ply_contact = ply_contact(model);
+    let mut ply_contact = model.ply_contact(EXPLICIT_PLY_MARGIN);
     let mut previous = PreviousStep {
         forces: zeros.clone(),
         contact: zeros.clone(),
@@ -303,27 +303,6 @@ fn advance(
     state.energies.damping += damping_work;
 }
 
-/// The contact between the plies of `model` across its interfaces; `None` without any. The
-/// Verlet margin is half the mean cell size.
-fn ply_contact(model: &Model) -> Option<PlyContact> {
-    if model.interfaces.is_empty() {
-        return None;
-    }
-    let mean_size =
-        model.elements.iter().map(|e| e.area.sqrt()).sum::<f64>() / model.elements.len() as f64;
-    let settings = (
-        model.contact.penalty_scale,
-        model.thinnest_ply(),
-        0.5 * mean_size,
-    );
-    Some(PlyContact::new(
-        model.ply_surfaces(),
-        model.interfaces.clone(),
-        model.nodal_areas(),
-        settings,
-    ))
-}
-
 /// Contact forces of the tools on every node for the step `dt` about to be taken
 /// (`contact::penalty`), and the loads on the tools.
 fn tool_contact(model: &Model, state: &mut State, dt: f64) {
@@ -380,6 +359,10 @@ fn energy_runs_away(e: &Energies) -> bool {
 
 /// Energy balance error (fraction of the work put in) taken as a blow-up.
 const RUNAWAY_BALANCE: f64 = 0.5;
+
+/// The Verlet margin of the ply–ply contact's lists, in mean cell sizes **(choice)**: a step
+/// moves a node far less than a cell, and the lists are made again once one moved half of it.
+const EXPLICIT_PLY_MARGIN: f64 = 0.5;
 
 /// Consecutive steps the balance must stay off before the run is stopped: in the first steps
 /// the energies are tiny and the half-step offset of leapfrog velocities alone (kinetic energy

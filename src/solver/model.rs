@@ -3,7 +3,7 @@
 //! so that the solvers, the tangent and the writers see one set of nodes; each ply knows its
 //! ranges.
 
-use crate::contact::ply_contact::{PlyInterface, PlySurface};
+use crate::contact::ply_contact::{PlyContact, PlyInterface, PlySurface};
 use crate::contact::{ContactSettings, RigidTool};
 use crate::element::bending::BendingError;
 use crate::element::membrane::ElementError;
@@ -344,6 +344,30 @@ impl Model {
                 half_thickness: 0.5 * ply.laminate.reference_thickness(),
             })
             .collect()
+    }
+
+    /// The contact between the plies across [`Self::interfaces`], with a Verlet margin of
+    /// `margin_cells` mean cell sizes; `None` without any interface.
+    pub fn ply_contact(&self, margin_cells: f64) -> Option<PlyContact> {
+        if self.interfaces.is_empty() {
+            return None;
+        }
+        let settings = (
+            self.contact.penalty_scale,
+            self.thinnest_ply(),
+            margin_cells * self.mean_cell_size(),
+        );
+        Some(PlyContact::new(
+            self.ply_surfaces(),
+            self.interfaces.clone(),
+            self.nodal_areas(),
+            settings,
+        ))
+    }
+
+    /// The mean of the cells' square roots of area (mm).
+    pub fn mean_cell_size(&self) -> f64 {
+        self.elements.iter().map(|e| e.area.sqrt()).sum::<f64>() / self.elements.len().max(1) as f64
     }
 
     /// The same sheet between rigid tools, with the contact settings given.

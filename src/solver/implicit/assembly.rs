@@ -6,8 +6,14 @@
 //! Elements and patches are evaluated in parallel in chunks of fixed size and their entries
 //! added in element order, so the sums do not depend on the thread count.
 
+use super::interply::{HeldFace, Interply, PlyNodeContact};
 use super::linear::{minimum_degree, nested_dissection, Pattern, Sparsified};
-use crate::contact::potential::{pair_contact, FrictionLag, PairContact, PairHessian, PairOptions};
+use super::scatter::Scatter;
+use crate::contact::ply_contact::{InterplyNode, PlyContact};
+use crate::contact::ply_potential::PlyLag;
+use crate::contact::potential::{
+    contact_margin, pair_contact, FrictionLag, PairContact, PairHessian, PairOptions,
+};
 use crate::contact::Projection;
 use crate::contact::{NearTriangles, NodeContact, ToolLoad, ToolMotion};
 use crate::material::laminate::BackwardEulerStep;
@@ -48,10 +54,14 @@ pub struct Layout {
     patches: Vec<Scatter>,
     /// Where each node's own 3x3 block is stored (contact, drag).
     diagonal: Vec<Scatter>,
+    /// Pairs of nodes of neighbouring plies the ply–ply contact may couple.
+    couplings: Vec<Vec<usize>>,
 }
 
 impl Layout {
-    pub fn new(model: &Model, penalty: Vec<f64>, drag: Vec<f64>) -> Self {
+    /// The layout of `model` with the tools' springs `penalty` and the drag `drag` per node,
+    /// the ply–ply contact coupling the node pairs `couplings`.
+    pub fn new(model: &Model, penalty: Vec<f64>, drag: Vec<f64>, couplings: &[[usize; 2]]) -> Self {
         let nodes = model.mesh.nodes.len();
         let mut tool_unknown = Vec::new();
         let mut tool_force = Vec::new();
@@ -86,8 +96,10 @@ impl Layout {
         let patch_nodes: Vec<Vec<usize>> = model.bending.as_ref().map_or(Vec::new(), |b| {
             b.patches.iter().map(|p| p.nodes.clone()).collect()
         });
-        let groups = unknown_groups(nodes, &[&element_nodes, &patch_nodes], &tool_unknown);
-        let order = elimination_order(model, nodes, &element_nodes, &patch_nodes, size);
+        let couplings: Vec<Vec<usize>> = couplings.iter().map(|c| c.to_vec()).collect();
+        let sets = [&element_nodes[..], &patch_nodes, &couplings];
+        let groups = unknown_groups(nodes, &sets, &tool_unknown);
+        let order = elimination_order(model, nodes, &sets, size);
         let pattern = Pattern::from_groups_in_order(size, groups.iter().map(|g| &g[..]), order);
         let scatter = |nodes: &Vec<usize>| Scatter::new(&pattern, &held, nodes);
         let elements = element_nodes.iter().map(scatter).collect();
@@ -109,11 +121,12 @@ impl Layout {
             elements,
             patches,
             diagonal,
+            couplings,
         }
     }
 
-    /// The tangent on the membrane's stencil of `model` (this layout's), the bending patches'
-    /// farther couplings moved onto the diagonal: the preconditioner of the linear solves
+    /// The tangent on the membrane's stencil of `model` (this layout's) and the ply–ply
+    /// contact's couplings, the bending patches' farther couplings moved onto the diagonal: the preconditioner of the linear solves
     /// (docs/solver.md, "Conjugate gradients on the membrane's stencil"); `None` without
     /// bending patches, where the stencils are the same.
     pub fn membrane_preconditioner(&self, model: &Model) -> Option<Sparsified> {
@@ -122,8 +135,9 @@ impl Layout {
         }
         let element_nodes: Vec<Vec<usize>> =
             model.elements.iter().map(|e| e.nodes().to_vec()).collect();
-        let groups = unknown_groups(self.nodes, &[&element_nodes], &self.tool_unknown);
-        let order = elimination_order(model, self.nodes, &element_nodes, &[], self.size);
+        let sets = [&element_nodes[..], &self.couplings];
+        let groups = unknown_groups(self.nodes, &sets, &self.tool_unknown);
+        let order = elimination_order(model, self.nodes, &sets, self.size);
         let membrane =
             Pattern::from_groups_in_order(self.size, groups.iter().map(|g| &g[..]), order);
         Some(Sparsified::new(&self.pattern, membrane))
@@ -202,12 +216,11 @@ fn unknown_groups(
 fn elimination_order(
     model: &Model,
     nodes: usize,
-    element_nodes: &[Vec<usize>],
-    patch_nodes: &[Vec<usize>],
+    sets: &[&[Vec<usize>]],
     size: usize,
 ) -> Vec<usize> {
     let mut neighbours = vec![Vec::new(); nodes];
-    for group in element_nodes.iter().chain(patch_nodes) {
+    for group in sets.iter().flat_map(|s| s.iter()) {
         for &a in group {
             neighbours[a].extend(group.iter().copied().filter(|&b| b != a));
         }
@@ -266,6 +279,12 @@ pub struct IncrementStart<'a> {
     pub velocities: &'a [Vector3<f64>],
     pub masses: &'a [f64],
     pub dt: f64,
+    /// Friction of each node on the plies below and above it, and the faces listed near it
+    /// (the state's; empty without interfaces).
+    pub ply_lags: &'a [[Option<PlyLag>; 2]],
+    pub ply_lists: &'a [InterplyNode],
+    /// The triangle each node's ply–ply pairs are held on ([`super::interply::HeldFaces`]).
+    pub ply_faces: &'a [[Option<HeldFace>; 2]],
 }
 
 /// How the tangent is formed.
@@ -346,8 +365,11 @@ pub struct Evaluation {
     pub drag_work: f64,
     /// The incremental potential `Pi` (N·mm) whose gradient is the residual.
     pub potential: f64,
-    /// Node–tool pairs with the node behind the tool beyond the contact's reach.
+    /// Node–tool pairs with the node behind the tool beyond the contact's reach, and
+    /// ply–ply pairs with the node deeper in the other ply.
     pub tunnelled: usize,
+    /// Each node's contact with its neighbouring plies (empty without interfaces).
+    pub interply: Vec<PlyNodeContact>,
 }
 
 /// Evaluates the residual and tangent of a model.
@@ -362,6 +384,8 @@ pub struct Evaluator<'a> {
     /// Elastic slip of friction's stick (mm): the slip at which a node starting from rest
     /// reaches Coulomb's limit.
     pub stick_slip: f64,
+    /// The contact between the plies, where the model has interfaces.
+    pub plies: Option<&'a PlyContact>,
 }
 
 /// One element's share of the residual.
@@ -376,6 +400,20 @@ struct ElementShare {
 type ElementBlocks = [[Matrix3<f64>; 4]; 4];
 
 impl Evaluator<'_> {
+    /// The ply–ply contact of the increment from `start`, where the model has interfaces.
+    pub fn interply<'s>(&'s self, start: &IncrementStart<'s>) -> Option<Interply<'s>> {
+        Some(Interply {
+            contact: self.plies?,
+            lists: start.ply_lists,
+            lags: start.ply_lags,
+            faces: start.ply_faces,
+            springs: &self.layout.penalty,
+            margin: contact_margin(&self.model.contact),
+            stick: self.stick_slip,
+            dt: start.dt,
+        })
+    }
+
     /// The residual at `trial` and, unless `tangent` is [`Tangent::None`], the tangent there.
     pub fn evaluate(
         &self,
@@ -453,6 +491,11 @@ impl Evaluator<'_> {
         }
         let contact = self.contact(start, trial, &mut residual);
         potential += contact.energy;
+        let plies = self
+            .interply(start)
+            .map(|plies| plies.residual(trial.positions, &mut residual))
+            .unwrap_or_default();
+        potential += plies.energy;
         let mut drag_work = 0.0;
         for n in 0..layout.nodes {
             let travel = trial.positions[n] - start.positions[n];
@@ -489,7 +532,8 @@ impl Evaluator<'_> {
             nearest: contact.nearest,
             drag_work,
             potential,
-            tunnelled: contact.tunnelled,
+            tunnelled: contact.tunnelled + plies.tunnelled,
+            interply: plies.nodes,
         })
     }
 
@@ -543,6 +587,9 @@ impl Evaluator<'_> {
             }
         }
         self.contact_tangent(start, trial, evaluation, kind, values);
+        if let Some(plies) = self.interply(start) {
+            plies.add_tangent(trial.positions, (&layout.pattern, &layout.held), values);
+        }
         let rate = 1.0 / (start.dt * start.dt);
         for n in 0..layout.nodes {
             let c = layout.drag[n] + start.masses[n] * rate;
@@ -774,96 +821,6 @@ struct Contacts {
     nearest: Vec<Option<Projection>>,
     energy: f64,
     tunnelled: usize,
-}
-
-/// Where the lower-triangle entries of the 3x3 blocks of a group of nodes (an element, a
-/// patch, one node) are stored, found once: for every pair `(a, b)` of its nodes with `a`
-/// stored after `b` (or `a = b`), in that order, and every column `e` of the block, the place of its
-/// first stored row ([`Scatter::SKIP`] where the column is held). A binary search per column
-/// and block was the largest single cost of the assembly.
-struct Scatter {
-    nodes: Vec<usize>,
-    /// Where each node's unknowns are stored: a block `(a, b)` is stored where `a` comes after
-    /// `b` (the lower triangle).
-    rank: Vec<usize>,
-    places: Vec<u32>,
-}
-
-impl Scatter {
-    const SKIP: u32 = u32::MAX;
-
-    fn new(pattern: &Pattern, held: &[bool], nodes: &[usize]) -> Self {
-        let mut places = Vec::new();
-        let rank: Vec<usize> = nodes.iter().map(|&n| pattern.position(3 * n)).collect();
-        for (&na, &ra) in nodes.iter().zip(&rank) {
-            for (&nb, &rb) in nodes.iter().zip(&rank) {
-                if ra < rb {
-                    continue;
-                }
-                for e in 0..3 {
-                    let j = 3 * nb + e;
-                    let first = if na == nb { e } else { 0 };
-                    let place = pattern
-                        .place(3 * na + first, j)
-                        .filter(|_| !held[j])
-                        .map_or(Self::SKIP, |p| {
-                            u32::try_from(p).expect("fewer than 4e9 tangent entries")
-                        });
-                    places.push(place);
-                }
-            }
-        }
-        Self {
-            nodes: nodes.to_vec(),
-            rank,
-            places,
-        }
-    }
-
-    /// Adds `block(a, b)`, the 3x3 block of local nodes `(a, b)`, for every pair of the
-    /// group, skipping held rows and columns.
-    fn add(&self, held: &[bool], values: &mut [f64], block: impl Fn(usize, usize) -> Matrix3<f64>) {
-        self.add_within(held, values, 0, block);
-    }
-
-    /// [`Self::add`] to the places `offset..offset + part.len()` only, `part` holding them
-    /// (a column's run of places lies within one such range where it starts a column).
-    fn add_within(
-        &self,
-        held: &[bool],
-        part: &mut [f64],
-        offset: usize,
-        block: impl Fn(usize, usize) -> Matrix3<f64>,
-    ) {
-        let within = offset..offset + part.len();
-        let mut places = self.places.iter();
-        for (a, (&na, &ra)) in self.nodes.iter().zip(&self.rank).enumerate() {
-            for (b, (&nb, &rb)) in self.nodes.iter().zip(&self.rank).enumerate() {
-                if ra < rb {
-                    continue;
-                }
-                // a held column's SKIP lies beyond every stored place, so within no part
-                let columns = [(); 3].map(|_| *places.next().expect("a place per column"));
-                if !columns.iter().any(|&p| within.contains(&(p as usize))) {
-                    continue;
-                }
-                let k = block(a, b);
-                for (e, &start) in columns.iter().enumerate() {
-                    if !within.contains(&(start as usize)) {
-                        continue;
-                    }
-                    let start = start as usize - offset;
-                    let first = if na == nb { e } else { 0 };
-                    for d in first..3 {
-                        // a node's three unknowns are stored one after the other
-                        if !held[3 * na + d] {
-                            part[start + (d - first)] += k[(d, e)];
-                        }
-                    }
-                }
-            }
-        }
-    }
 }
 
 /// A symmetric 3x3 matrix with its negative eigenvalues set to zero.

@@ -19,8 +19,10 @@
 
 pub mod assembly;
 pub mod contact_entry;
+pub mod interply;
 pub mod linear;
 mod newton;
+mod scatter;
 mod supernodal;
 
 use super::energy::Energies;
@@ -29,9 +31,11 @@ use super::model::{rest_moduli, Model, Motion, Ply};
 use super::observer::Observer;
 use super::state::State;
 use crate::contact::penalty::nodes_through_tools;
+use crate::contact::ply_contact::PlyContact;
 use crate::contact::potential::{penalty_stiffness, FrictionLag};
 use crate::contact::{RigidTool, ToolMotion};
 use assembly::{Evaluation, Evaluator, IncrementStart, Layout, NearLists, Tangent, Trial};
+use interply::PlyLags;
 use linear::{Cholesky, NotSolved, Sparsified};
 use nalgebra::{Matrix2, Vector3};
 use newton::{newton, Problem};
@@ -113,6 +117,10 @@ struct Converged {
     previous_forces: Vec<Vector3<f64>>,
     previous_reactions: Vec<Vector3<f64>>,
     previous_contact: Vec<Vector3<f64>>,
+    /// Friction of each node on the plies below and above it, lagged for the next increment,
+    /// and the force of the plies on each node at the last one.
+    ply_lags: PlyLags,
+    previous_interply: Vec<Vector3<f64>>,
 }
 
 /// What Newton's method keeps from one iteration and increment to the next: the
@@ -125,6 +133,39 @@ struct Workspace {
     values: Vec<f64>,
     /// Where the linear solves are iterative, their preconditioner.
     preconditioner: Option<Preconditioner>,
+}
+
+impl Workspace {
+    /// The symbolic factorisations of `layout`'s tangent and, where its solves are made
+    /// iteratively, of its preconditioner.
+    fn new(
+        model: &Model,
+        layout: &Layout,
+        settings: &ImplicitSettings,
+    ) -> Result<Self, SolverError> {
+        let cholesky = Cholesky::analyse(&layout.pattern).map_err(SolverError::Settings)?;
+        let preconditioner = Preconditioner::of(model, layout, &cholesky, settings.iterative_from)
+            .map_err(SolverError::Settings)?;
+        Ok(Self {
+            cholesky,
+            near: NearLists::default(),
+            values: Vec::new(),
+            preconditioner,
+        })
+    }
+
+    /// Laid out again on `layout`, the lists of near triangles kept.
+    fn relaid(
+        self,
+        model: &Model,
+        layout: &Layout,
+        settings: &ImplicitSettings,
+    ) -> Result<Self, SolverError> {
+        Ok(Self {
+            near: self.near,
+            ..Self::new(model, layout, settings)?
+        })
+    }
 }
 
 /// The tangent on the membrane's stencil: where its entries come from, its factorisation and
@@ -216,30 +257,11 @@ pub fn run(
     stats: &mut ImplicitStatistics,
 ) -> Result<State, SolverError> {
     check_settings(settings)?;
-    if !model.interfaces.is_empty() {
-        return Err(SolverError::Settings(
-            "the blank's plies touch one another (interfaces), and contact between plies is in \
-             the explicit solver only: run it with the explicit solver"
-                .into(),
-        ));
-    }
-    let layout = layout(model, settings)?;
-    let cholesky = Cholesky::analyse(&layout.pattern).map_err(SolverError::Settings)?;
-    let preconditioner = Preconditioner::of(model, &layout, &cholesky, settings.iterative_from)
-        .map_err(SolverError::Settings)?;
-    let mut work = Workspace {
-        cholesky,
-        near: NearLists::default(),
-        values: Vec::new(),
-        preconditioner,
-    };
-    let evaluator = Evaluator {
-        model,
-        layout: &layout,
-        exact: settings.exact_tangent,
-        stick_slip: stick_slip(model, settings),
-    };
+    let mut plies = model.ply_contact(IMPLICIT_PLY_MARGIN);
     let mut state = rest_state(model);
+    let couplings = relist_plies(plies.as_mut(), &mut state, true);
+    let mut layout = layout(model, settings, &couplings)?;
+    let mut work = Workspace::new(model, &layout, settings)?;
     seat_force_driven_tools(model, &layout, &mut state);
     let n = model.mesh.nodes.len();
     let mut converged = Converged {
@@ -248,11 +270,14 @@ pub fn run(
         previous_forces: vec![Vector3::zeros(); n],
         previous_reactions: vec![Vector3::zeros(); n],
         previous_contact: vec![Vector3::zeros(); n],
+        ply_lags: vec![[None, None]; state.interply.len()],
+        previous_interply: vec![Vector3::zeros(); n],
     };
     let max_increment = settings
         .max_increment
         .unwrap_or(settings.end_time / DEFAULT_INCREMENTS);
     let mut dt = 0.25 * max_increment;
+    let evaluator = evaluator_of(model, &layout, settings, plies.as_ref());
     close_force_driven_tools(
         &evaluator,
         &mut work,
@@ -278,6 +303,12 @@ pub fn run(
                 time: state.time,
             });
         }
+        let couplings = relist_plies(plies.as_mut(), &mut state, false);
+        if !couplings.is_empty() {
+            layout = self::layout(model, settings, &couplings)?;
+            work = work.relaid(model, &layout, settings)?;
+        }
+        let evaluator = evaluator_of(model, &layout, settings, plies.as_ref());
         let step = dt.min(settings.end_time - state.time);
         let attempt = increment(
             &evaluator,
@@ -290,8 +321,7 @@ pub fn run(
         match attempt {
             Ok((evaluation, positions, translations, iterations)) => {
                 accept(
-                    model,
-                    &layout,
+                    &evaluator,
                     &mut state,
                     &mut converged,
                     (evaluation, positions, translations),
@@ -342,6 +372,46 @@ pub fn run(
     Ok(state)
 }
 
+/// The Verlet margin of the ply–ply contact's lists in the implicit solver, in mean cell sizes
+/// **(choice)**: an increment moves a node a fraction of a cell, and each listing lays the
+/// tangent's pattern out again, so the lists reach farther than the explicit solver's.
+const IMPLICIT_PLY_MARGIN: f64 = 1.0;
+
+/// The evaluator of `model` on `layout`, with the ply contact `plies`.
+fn evaluator_of<'a>(
+    model: &'a Model,
+    layout: &'a Layout,
+    settings: &ImplicitSettings,
+    plies: Option<&'a PlyContact>,
+) -> Evaluator<'a> {
+    Evaluator {
+        model,
+        layout,
+        exact: settings.exact_tangent,
+        stick_slip: stick_slip(model, settings),
+        plies,
+    }
+}
+
+/// Lists the faces near each node of the plies again where a node has moved half their margin
+/// (or `always`), into the state: the node pairs the tangent must then couple; none where the
+/// lists still hold or the model has no interfaces.
+fn relist_plies(
+    plies: Option<&mut PlyContact>,
+    state: &mut State,
+    always: bool,
+) -> Vec<[usize; 2]> {
+    let Some(plies) = plies else {
+        return Vec::new();
+    };
+    let relisted = plies.relist_if_moved(&state.positions, &mut state.interply);
+    if relisted || always {
+        plies.listed_pairs(&state.interply)
+    } else {
+        Vec::new()
+    }
+}
+
 /// Increments over the run at their largest where [`ImplicitSettings::max_increment`] is not
 /// set, and of the stroke where `process.max_increment` is not **(choice)**: 0.5 mm on the
 /// examples' 30 mm, where the hemisphere's 400 to 20,164 cells converge in 5 to 10 Newton
@@ -366,14 +436,18 @@ pub fn residual_and_tangent(
     dt: f64,
     friction: &[Vec<Option<FrictionLag>>],
 ) -> Result<(Vec<f64>, nalgebra::DMatrix<f64>), SolverError> {
-    let layout = layout(model, settings)?;
-    let evaluator = Evaluator {
-        model,
-        layout: &layout,
-        exact: settings.exact_tangent,
-        stick_slip: stick_slip(model, settings),
-    };
-    let rest = rest_state(model);
+    let mut plies = model.ply_contact(IMPLICIT_PLY_MARGIN);
+    let mut rest = rest_state(model);
+    let mut at_trial = rest.clone();
+    at_trial.positions = positions.to_vec();
+    let couplings = relist_plies(plies.as_mut(), &mut at_trial, true);
+    let layout = layout(model, settings, &couplings)?;
+    let evaluator = evaluator_of(model, &layout, settings, plies.as_ref());
+    rest.interply = at_trial.interply;
+    let no_ply_friction = vec![[None, None]; rest.interply.len()];
+    let faces = plies.as_ref().map_or(Vec::new(), |p| {
+        interply::held_faces(p, &rest.interply, positions)
+    });
     let strains = vec![Matrix2::identity(); model.elements.len()];
     let start = IncrementStart {
         positions: &rest.positions,
@@ -383,6 +457,9 @@ pub fn residual_and_tangent(
         velocities: &rest.velocities,
         masses: &rest.masses,
         dt,
+        ply_lags: &no_ply_friction,
+        ply_lists: &rest.interply,
+        ply_faces: &faces,
     };
     let trial = Trial {
         positions,
@@ -423,8 +500,13 @@ fn record(
         })
 }
 
-/// The unknowns, pattern, contact springs and drag of `model`.
-pub fn layout(model: &Model, settings: &ImplicitSettings) -> Result<Layout, SolverError> {
+/// The unknowns, pattern, contact springs and drag of `model`, the ply–ply contact coupling
+/// the node pairs `couplings`.
+pub fn layout(
+    model: &Model,
+    settings: &ImplicitSettings,
+    couplings: &[[usize; 2]],
+) -> Result<Layout, SolverError> {
     let stiffness = model
         .plies
         .iter()
@@ -461,7 +543,7 @@ pub fn layout(model: &Model, settings: &ImplicitSettings) -> Result<Layout, Solv
         .iter()
         .map(|&(wave, shear)| shear.max(1e-12 * wave))
         .fold(f64::INFINITY, f64::min);
-    let mut layout = Layout::new(model, penalty, drag);
+    let mut layout = Layout::new(model, penalty, drag, couplings);
     layout.force_floor = FORCE_FLOOR * softest * mean_size;
     layout.length_scale = mean_size;
     Ok(layout)
@@ -502,7 +584,13 @@ const SPARSE_ENTRY_BYTES: f64 = 16.0;
 /// state.
 pub fn sparse_memory(model: &Model) -> Result<f64, String> {
     let n = model.mesh.nodes.len();
-    let layout = Layout::new(model, vec![0.0; n], vec![0.0; n]);
+    let mut rest = rest_state(model);
+    let couplings = relist_plies(
+        model.ply_contact(IMPLICIT_PLY_MARGIN).as_mut(),
+        &mut rest,
+        true,
+    );
+    let layout = Layout::new(model, vec![0.0; n], vec![0.0; n], &couplings);
     let cholesky = Cholesky::analyse(&layout.pattern)?;
     let mut entries = layout.pattern.entries() + cholesky.factor_entries();
     if let Some(p) = Preconditioner::of(model, &layout, &cholesky, ITERATIVE_FACTOR_ENTRIES)? {
@@ -626,8 +714,7 @@ fn close_force_driven_tools(
         return;
     };
     accept(
-        model,
-        evaluator.layout,
+        evaluator,
         state,
         converged,
         (evaluation, x, translations),
@@ -741,13 +828,14 @@ const CG_ITERATIONS: usize = 200;
 /// Takes the converged increment into the state: positions, forces, contact, tools, energies
 /// (trapezoidal work sums as in the explicit solver), and the friction lagged for the next.
 fn accept(
-    model: &Model,
-    layout: &Layout,
+    evaluator: &Evaluator,
     state: &mut State,
     converged: &mut Converged,
     (evaluation, x, translations): (Evaluation, Vec<Vector3<f64>>, Vec<Vector3<f64>>),
     dt: f64,
 ) {
+    let (model, layout) = (evaluator.model, evaluator.layout);
+    accept_interply(evaluator, state, converged, (&evaluation, &x), dt);
     let (mut internal, mut external, mut tool) = (0.0, 0.0, 0.0);
     let (mut kinetic, mut dissipated) = (0.0, 0.0);
     for (a, x_a) in x.iter().enumerate() {
@@ -814,6 +902,57 @@ fn accept(
     state.energies.external_work += external + tool;
     state.energies.tool_work += tool;
     state.energies.damping += evaluation.drag_work + dissipated;
+}
+
+/// Takes the ply–ply contact of the converged increment into the state (forces, pressures,
+/// slip) and its work into the energies, and lags friction for the next increment.
+fn accept_interply(
+    evaluator: &Evaluator,
+    state: &mut State,
+    converged: &mut Converged,
+    (evaluation, x): (&Evaluation, &[Vector3<f64>]),
+    dt: f64,
+) {
+    let (slips, lags) = {
+        let start = IncrementStart {
+            positions: &state.positions,
+            strains: &converged.strains,
+            laminate_states: &state.laminate_states,
+            friction: &converged.friction,
+            velocities: &state.velocities,
+            masses: &state.masses,
+            dt,
+            ply_lags: &converged.ply_lags,
+            ply_lists: &state.interply,
+            ply_faces: &[],
+        };
+        let Some(plies) = evaluator.interply(&start) else {
+            return;
+        };
+        (
+            plies.slips(x),
+            plies.lags_after(&evaluation.interply, x, dt),
+        )
+    };
+    let mut work = 0.0;
+    for (a, (node, contact)) in state
+        .interply
+        .iter_mut()
+        .zip(&evaluation.interply)
+        .enumerate()
+    {
+        let du = x[a] - state.positions[a];
+        work += 0.5 * (converged.previous_interply[a] + contact.force).dot(&du);
+        converged.previous_interply[a] = contact.force;
+        node.force = contact.force;
+        for (side, (s, now)) in node.sides.iter_mut().zip(&contact.sides).enumerate() {
+            s.normal_force = now.normal_force;
+            s.tangential = now.tangential;
+            s.slip += slips[a][side];
+        }
+    }
+    converged.ply_lags = lags;
+    state.energies.interply_work += work;
 }
 
 fn check_settings(s: &ImplicitSettings) -> Result<(), SolverError> {

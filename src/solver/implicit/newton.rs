@@ -7,6 +7,7 @@
 //! ([`Iterate::line_search`]) and what follows when it finds no step ([`Iterate::without_step`]).
 
 use super::assembly::{Evaluation, Evaluator, IncrementStart, Layout, Tangent, Trial};
+use super::interply::{held_faces, HeldFaces, PlyLags};
 use super::{contact_entry, iterative_solve, lag_normal, NotIterated};
 use super::{Converged, ImplicitSettings, ImplicitStatistics, NotConverged, Solved, Workspace};
 use crate::contact::potential::FrictionLag;
@@ -36,6 +37,10 @@ struct Iterate {
     /// Friction of each node on each tool, lagged for this increment's problem, and how often
     /// it was lagged again with the normal forces reached.
     lags: Vec<Vec<Option<FrictionLag>>>,
+    /// The same of each node on the plies below and above it, and the triangles its ply–ply
+    /// contact is held on.
+    ply_lags: PlyLags,
+    ply_faces: HeldFaces,
     refreshes: usize,
     /// Residual norms (N) since the problem was last set.
     residuals: Vec<f64>,
@@ -138,6 +143,10 @@ impl Iterate {
             x,
             translations,
             lags: problem.converged.friction.clone(),
+            ply_lags: problem.converged.ply_lags.clone(),
+            ply_faces: problem.evaluator.plies.map_or(Vec::new(), |p| {
+                held_faces(p, &problem.state.interply, &problem.state.positions)
+            }),
             refreshes: 0,
             residuals: Vec::new(),
             projected: false,
@@ -158,6 +167,9 @@ impl Iterate {
             velocities: &state.velocities,
             masses: &state.masses,
             dt: problem.dt,
+            ply_lags: &self.ply_lags,
+            ply_lists: &state.interply,
+            ply_faces: &self.ply_faces,
         }
     }
 
@@ -215,16 +227,33 @@ impl Iterate {
             return false;
         }
         let model = problem.evaluator.model;
-        let Some(better) = refined_lags(
+        let tools = refined_lags(
             model,
             problem.state,
             &self.lags,
             evaluation,
             (&self.x, &self.translations),
-        ) else {
+        );
+        let plies = problem
+            .evaluator
+            .interply(&self.start(problem))
+            .and_then(|plies| {
+                let motion = (&problem.state.positions[..], &self.x[..], problem.dt);
+                plies.refined_lags(&evaluation.interply, motion, FRICTION_LAG_CHANGE)
+            });
+        let faces = self.faces_moved(problem, evaluation);
+        if tools.is_none() && plies.is_none() && faces.is_none() {
             return false;
-        };
-        self.lags = better;
+        }
+        if let Some(faces) = faces {
+            self.ply_faces = faces;
+        }
+        if let Some(better) = tools {
+            self.lags = better;
+        }
+        if let Some(better) = plies {
+            self.ply_lags = better;
+        }
         self.refreshes += 1;
         self.carried = None;
         self.residuals.clear();
@@ -232,6 +261,20 @@ impl Iterate {
         self.freezes = 0;
         self.projected = false;
         true
+    }
+
+    /// The triangles nearest to the ply–ply pairs at the iterate, where a node pressed on a
+    /// neighbouring ply has slid off the one it was held on; `None` otherwise.
+    fn faces_moved(&self, problem: &Problem, evaluation: &Evaluation) -> Option<HeldFaces> {
+        let plies = problem.evaluator.plies?;
+        let now = held_faces(plies, &problem.state.interply, &self.x);
+        let moved = evaluation.interply.iter().enumerate().any(|(a, c)| {
+            (0..2).any(|side| {
+                c.sides[side].normal_force > 0.0
+                    && now[a][side].map(|f| f.0) != self.ply_faces[a][side].map(|f| f.0)
+            })
+        });
+        moved.then_some(now)
     }
 
     /// The residual is within its tolerance: the increment's solution (`Ok`), unless a node
@@ -862,7 +905,15 @@ fn free_norm(layout: &Layout, residual: &[f64]) -> f64 {
 /// The size of the forces at play: internal, contact and applied (N).
 fn force_scale(layout: &Layout, e: &Evaluation) -> f64 {
     let internal: f64 = e.internal.iter().map(|f| f.norm_squared()).sum();
-    let contact: f64 = e.contacts.iter().map(|c| c.force.norm_squared()).sum();
+    let contact: f64 = e
+        .contacts
+        .iter()
+        .map(|c| c.force.norm_squared())
+        .sum::<f64>()
+        + e.interply
+            .iter()
+            .map(|c| c.force.norm_squared())
+            .sum::<f64>();
     let applied: f64 = layout.tool_force.iter().flatten().map(|(_, f)| f * f).sum();
     (internal + contact + applied).sqrt().max(1e-9)
 }
