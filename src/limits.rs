@@ -301,6 +301,37 @@ pub const FILM_YIELD: Range = Range::above(
     "MPa",
     "a molten film yields far below the 1 GPa of a solid polymer",
 );
+/// Thickness of the molten film between two plies (mm).
+pub const FILM_THICKNESS: Range = Range::above(
+    0.0,
+    100.0,
+    "mm",
+    "a film between two plies is thinner than any ply",
+);
+/// Consistency `K` of a power-law film (Pa·s^n).
+pub const FILM_CONSISTENCY: Range = Range::above(
+    0.0,
+    1e8,
+    "Pa·s^n",
+    "1e8 Pa·s^n is beyond any melt a ply is formed in",
+);
+/// Power-law index `n` of a shear-thinning film.
+pub const FILM_INDEX: Range = Range::above(
+    0.0,
+    1.0,
+    "",
+    "a melt thins with the shear rate (n < 1) or not (n = 1), never thickens",
+);
+/// Lowest shear rate of a power-law film (1/s).
+pub const FILM_CUTOFF_RATE: Range = Range::above(
+    0.0,
+    1e6,
+    "1/s",
+    "a million per second is past any rheometer and any press",
+);
+/// Stress at which a Cross film turns from Newtonian to thinning (MPa).
+pub const FILM_TRANSITION_STRESS: Range =
+    Range::above(0.0, 1e3, "MPa", "1 GPa is beyond any stress a melt carries");
 /// Bending rigidity per unit width (N·mm).
 pub const BENDING_RIGIDITY: Range = Range::closed(
     0.0,

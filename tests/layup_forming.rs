@@ -165,7 +165,23 @@ fn formed_layup_runs_in_calculix(dir: &std::path::Path) {
 /// Bad layups are refused before any step with exit code 2, the message naming the key.
 #[test]
 fn bad_layups_are_refused_naming_the_key() {
-    let cases: [(&str, &str); 6] = [
+    let cases: [(&str, &str); 10] = [
+        (
+            "blank.interply.friction=[[300.0, 0.2], [280.0, 0.3]]",
+            "temperatures of blank.interply.friction must increase strictly",
+        ),
+        (
+            "blank.interply.yield_stress=[[310.0, 0.1], [320.0, 0.1]]",
+            "blank.interply.yield_stress is given from 310 to 320 °C",
+        ),
+        (
+            "blank.interply.film_index=0.4",
+            "blank.interply.film_index is not a key",
+        ),
+        (
+            "blank.interply.yield_stress=[[280.0, 0.1], [320.0, -1.0]]",
+            "blank.interply.yield_stress (pair 2, at 320 °C) = -1 MPa is out of range",
+        ),
         ("blank.interply.friction=-1", "blank.interply.friction"),
         ("blank.ply_angles=[0.0]", "two or more"),
         ("blank.ply_angle=10", "remove blank.ply_angle"),

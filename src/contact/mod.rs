@@ -2,6 +2,7 @@
 //! standard tool shapes, and penalty contact with Coulomb friction.
 
 pub mod blended_surface;
+pub mod film_friction;
 pub mod penalty;
 pub mod ply_contact;
 pub mod ply_potential;

@@ -17,70 +17,22 @@
 //! Friction is carried as with the tools (elastic stick, then a slip limit), on the velocity
 //! of the node relative to the face's point, `v - sum N_i v_i`, with the film's slip limit
 //!
-//! `F_t <= min(mu f_n + (eta_f / h_f) |v_t| A, tau_max A)` (model.md Eq. (F1)),
+//! `F_t <= min(mu f_n + eta_f(v_t / h_f) (|v_t| / h_f) A, tau_max A)` (model.md Eq. (F1)),
 //!
 //! `A` half the node's share of its ply's area (the nodes of both plies carry the film between
-//! them): Coulomb friction plus the viscous shear of a film of viscosity `eta_f` and thickness
-//! `h_f`, capped at the film's yield `tau_max`.
+//! them): Coulomb friction plus the viscous shear of a film of thickness `h_f`, its viscosity
+//! `eta_f` constant or falling with the shear rate, capped at the film's yield `tau_max`
+//! ([`FilmFriction`], in `contact::film_friction`).
 //!
 //! The faces near each node are listed within the contact's reach plus a margin and listed
 //! again once any node has moved half the margin (a Verlet list), from a uniform grid.
 
+pub use super::film_friction::{FilmFriction, FilmViscosity};
 use super::surface::{closest_feature_on_triangle, Feature};
 use nalgebra::Vector3;
 use rayon::prelude::*;
 use std::collections::HashMap;
 use std::ops::Range;
-
-/// The friction of an interface (model.md Eq. (F1)).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct FilmFriction {
-    /// Coulomb coefficient `mu`.
-    pub coulomb: f64,
-    /// `eta_f / h_f`, the film's viscosity over its thickness (MPa·s/mm = N·s/mm^3); 0: none.
-    pub film: f64,
-    /// The film's yield shear stress `tau_max` (MPa); infinite: none.
-    pub shear_cap: f64,
-}
-
-impl FilmFriction {
-    /// Coulomb friction alone.
-    pub fn coulomb(mu: f64) -> Self {
-        Self {
-            coulomb: mu,
-            film: 0.0,
-            shear_cap: f64::INFINITY,
-        }
-    }
-
-    /// The largest tangential force a node of area `area` (mm^2) pressed with `normal_force`
-    /// (N) carries while slipping at `speed` (mm/s) (N).
-    pub fn slip_limit(&self, normal_force: f64, speed: f64, area: f64) -> f64 {
-        let drag = self.coulomb * normal_force + self.film * speed * area;
-        drag.min(self.shear_cap * area)
-    }
-
-    /// Checks the values: finite, not negative, a positive cap.
-    pub fn validate(&self) -> Result<(), String> {
-        let fine = |v: f64| v.is_finite() && v >= 0.0;
-        if !fine(self.coulomb) {
-            return Err(format!(
-                "friction coefficient {} must be >= 0",
-                self.coulomb
-            ));
-        }
-        if !fine(self.film) {
-            return Err(format!(
-                "film viscosity over thickness {} must be >= 0",
-                self.film
-            ));
-        }
-        if self.shear_cap.is_nan() || self.shear_cap <= 0.0 {
-            return Err(format!("film yield stress {} must be > 0", self.shear_cap));
-        }
-        Ok(())
-    }
-}
 
 /// Two plies that touch: `upper` lies on the side of `lower` its cells' normals point to.
 #[derive(Clone, Copy, Debug, PartialEq)]

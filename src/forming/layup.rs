@@ -98,11 +98,13 @@ pub fn layup_model(
             .with_ply_bending(&rigidities)
             .map_err(|e| e.to_string())?;
     }
+    // the film sees the physical slip speed, as the matrix's eta1 does (docs/model.md §6)
+    let friction = layup.interply.time_scaled(p.time_scaling);
     let interfaces = (1..n)
         .map(|k| PlyInterface {
             lower: k - 1,
             upper: k,
-            friction: layup.interply,
+            friction,
         })
         .collect();
     model.with_interfaces(interfaces).map_err(|e| e.to_string())

@@ -5,9 +5,11 @@
 use crate::contact::ply_contact::FilmFriction;
 use crate::io::{from_toml_text, from_toml_value};
 use crate::limits::{
-    check_given, shown, shown_apart, ANGLE, FILM_VISCOSITY, FILM_YIELD, FORCE, FRAMES, FRICTION,
+    check_given, shown, shown_apart, Range, ANGLE, FILM_CONSISTENCY, FILM_CUTOFF_RATE, FILM_INDEX,
+    FILM_THICKNESS, FILM_TRANSITION_STRESS, FILM_VISCOSITY, FILM_YIELD, FORCE, FRAMES, FRICTION,
     GAP, HISTORY_POINTS, LENGTH, SHEAR_ANGLE, SPEED, TEMPERATURE, TIME_SCALING, TIME_STEP,
 };
+use crate::material::TemperatureTable;
 use crate::mesh::DiagonalPattern;
 use crate::solver::SolverKind;
 use nalgebra::Vector3;
@@ -47,7 +49,9 @@ pub struct Blank {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Layup {
     pub plies: Vec<PlySpec>,
-    /// `blank.interply`: the friction between every two neighbouring plies.
+    /// `blank.interply`: the friction between every two neighbouring plies, at
+    /// `process.temperature` and the physical speeds (the solver's time scaling is applied
+    /// when the model is built).
     pub interply: FilmFriction,
     /// Whether the plies came as `blank.ply_angles` (the keys named in messages).
     pub from_angles: bool,
@@ -72,42 +76,235 @@ struct PlyTable {
     name: Option<String>,
 }
 
-/// `[blank.interply]` as written: Eq. (F1) of docs/model.md.
+/// `[blank.interply]` as written: Eqs. (F1)–(F3) of docs/model.md. `friction`,
+/// `film_viscosity`, `film_consistency` and `yield_stress` are numbers or tables of
+/// `[temperature °C, value]` pairs ([`ByTemperature`]), taken at `process.temperature`.
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct InterplyTable {
-    friction: f64,
-    /// The film's viscosity (Pa·s) and thickness (mm): both or neither.
-    film_viscosity: Option<f64>,
+    friction: ByTemperature,
+    /// `"newtonian"` (the default), `"power-law"` or `"cross"`.
+    film_law: Option<FilmLaw>,
+    /// The film's viscosity (Pa·s; Cross: at a vanishing rate) and thickness (mm).
+    film_viscosity: Option<ByTemperature>,
     film_thickness: Option<f64>,
+    /// Power law: `K` (Pa·s^n) and the cut-off rate (1/s, default [`DEFAULT_CUTOFF_RATE`]).
+    film_consistency: Option<ByTemperature>,
+    film_cutoff_rate: Option<f64>,
+    /// Power law and Cross: `n`.
+    film_index: Option<f64>,
+    /// Cross: `tau_star` (MPa).
+    film_transition_stress: Option<f64>,
     /// The film's yield stress (MPa).
-    yield_stress: Option<f64>,
+    yield_stress: Option<ByTemperature>,
+}
+
+/// How the film's viscosity depends on its shear rate (docs/model.md Eqs. (F1)–(F3)).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+enum FilmLaw {
+    #[default]
+    Newtonian,
+    PowerLaw,
+    Cross,
+}
+
+impl FilmLaw {
+    fn name(self) -> &'static str {
+        match self {
+            Self::Newtonian => "newtonian",
+            Self::PowerLaw => "power-law",
+            Self::Cross => "cross",
+        }
+    }
+
+    /// The film keys the law needs, and those it may take besides.
+    fn keys(self) -> (&'static [&'static str], &'static [&'static str]) {
+        match self {
+            Self::Newtonian => (&[], &["film_viscosity", "film_thickness"]),
+            Self::PowerLaw => (
+                &["film_consistency", "film_index", "film_thickness"],
+                &["film_cutoff_rate"],
+            ),
+            Self::Cross => (
+                &[
+                    "film_viscosity",
+                    "film_index",
+                    "film_transition_stress",
+                    "film_thickness",
+                ],
+                &[],
+            ),
+        }
+    }
+}
+
+/// The cut-off rate of a power-law film where none is given (1/s): the film is Newtonian below
+/// it, at `K` (docs/model.md Eq. (F2)).
+pub const DEFAULT_CUTOFF_RATE: f64 = 1.0;
+
+/// A value of `[blank.interply]`: a number, or `[temperature °C, value]` pairs at increasing
+/// temperatures, interpolated linearly at the run's temperature (as a card's tables are,
+/// docs/model.md §2) and never extrapolated.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(
+    untagged,
+    expecting = "a number, or a list of [temperature °C, value] pairs at increasing \
+                 temperatures, such as [[280.0, 0.3], [320.0, 0.2]]"
+)]
+enum ByTemperature {
+    Number(f64),
+    Table(Vec<[f64; 2]>),
+}
+
+impl ByTemperature {
+    /// The value of `key` at `temperature` (°C), every value given within `range`.
+    fn at(&self, key: &str, range: Range, temperature: f64) -> Result<f64, String> {
+        let pairs = match self {
+            Self::Number(value) => {
+                range.check(key, *value)?;
+                return Ok(*value);
+            }
+            Self::Table(pairs) => pairs,
+        };
+        for (i, &[t, value]) in pairs.iter().enumerate() {
+            TEMPERATURE.check(&format!("{key} (pair {}, its temperature)", i + 1), t)?;
+            range.check(
+                &format!("{key} (pair {}, at {} °C)", i + 1, shown(t)),
+                value,
+            )?;
+        }
+        let (temperatures, values) = pairs.iter().map(|&[t, v]| (t, v)).unzip();
+        let table = TemperatureTable::new(key, temperatures, values)?;
+        table.at(temperature).map_err(|_| {
+            let (low, high) = table.range();
+            format!(
+                "{key} is given from {} to {} °C, and process.temperature = {} °C lies \
+                 outside: extend the table (it is never extrapolated) or form within it",
+                shown(low),
+                shown(high),
+                shown_apart(temperature, if temperature < low { low } else { high })
+            )
+        })
+    }
 }
 
 impl InterplyTable {
-    fn friction(&self) -> Result<FilmFriction, String> {
-        let film = match (self.film_viscosity, self.film_thickness) {
-            (None, None) => 0.0,
-            (Some(eta), Some(h)) if h > 0.0 => 1e-6 * eta / h,
-            (Some(_), Some(h)) => {
-                return Err(format!(
-                    "blank.interply.film_thickness = {} must be > 0",
-                    shown(h)
-                ))
-            }
-            _ => {
-                return Err(
-                    "blank.interply.film_viscosity and film_thickness go together: \
-                     give both, or neither for Coulomb friction alone"
-                        .into(),
-                )
-            }
+    /// The friction at `temperature` (°C), every value within its range, the film's keys
+    /// those of its law.
+    fn friction(&self, temperature: f64) -> Result<FilmFriction, String> {
+        let key = |name: &str| format!("blank.interply.{name}");
+        let mu = self.friction.at(&key("friction"), FRICTION, temperature)?;
+        let shear_cap = match &self.yield_stress {
+            Some(cap) => cap.at(&key("yield_stress"), FILM_YIELD, temperature)?,
+            None => f64::INFINITY,
         };
-        Ok(FilmFriction {
-            coulomb: self.friction,
-            film,
-            shear_cap: self.yield_stress.unwrap_or(f64::INFINITY),
+        let law = self.film_law.unwrap_or_default();
+        self.check_film_keys(law)?;
+        // Pa·s (and Pa·s^n) to the MPa·s of the model's units
+        const PA: f64 = 1e-6;
+        // check_film_keys has asked a shear-thinning film for its thickness
+        let Some(h) = self.film_thickness else {
+            return Ok(FilmFriction::newtonian(mu, 0.0, shear_cap));
+        };
+        FILM_THICKNESS.check(&key("film_thickness"), h)?;
+        Ok(match law {
+            FilmLaw::Newtonian => {
+                let eta = self.viscosity(temperature)?;
+                FilmFriction::newtonian(mu, PA * eta / h, shear_cap)
+            }
+            FilmLaw::PowerLaw => {
+                let consistency = match &self.film_consistency {
+                    Some(k) => k.at(&key("film_consistency"), FILM_CONSISTENCY, temperature)?,
+                    None => f64::NAN,
+                };
+                let cutoff = self.film_cutoff_rate.unwrap_or(DEFAULT_CUTOFF_RATE);
+                FILM_CUTOFF_RATE.check(&key("film_cutoff_rate"), cutoff)?;
+                let law = (PA * consistency, self.index()?, cutoff);
+                FilmFriction::power_law(mu, law, h, shear_cap)
+            }
+            FilmLaw::Cross => {
+                let eta0 = self.viscosity(temperature)?;
+                let tau_star = self.film_transition_stress.unwrap_or(f64::NAN);
+                FILM_TRANSITION_STRESS.check(&key("film_transition_stress"), tau_star)?;
+                FilmFriction::cross(mu, (PA * eta0, self.index()?, tau_star), h, shear_cap)
+            }
         })
+    }
+
+    /// `film_index`, `n`.
+    fn index(&self) -> Result<f64, String> {
+        let n = self.film_index.unwrap_or(f64::NAN);
+        FILM_INDEX.check("blank.interply.film_index", n)?;
+        Ok(n)
+    }
+
+    /// `film_viscosity` at `temperature` (Pa·s).
+    fn viscosity(&self, temperature: f64) -> Result<f64, String> {
+        let eta = self.film_viscosity.as_ref().ok_or("no film_viscosity")?;
+        eta.at("blank.interply.film_viscosity", FILM_VISCOSITY, temperature)
+    }
+
+    /// The film keys given are those of `law`: all it needs (for a Newtonian film, both of its
+    /// keys or neither), none of another law's.
+    fn check_film_keys(&self, law: FilmLaw) -> Result<(), String> {
+        let given = [
+            ("film_viscosity", self.film_viscosity.is_some()),
+            ("film_thickness", self.film_thickness.is_some()),
+            ("film_consistency", self.film_consistency.is_some()),
+            ("film_cutoff_rate", self.film_cutoff_rate.is_some()),
+            ("film_index", self.film_index.is_some()),
+            (
+                "film_transition_stress",
+                self.film_transition_stress.is_some(),
+            ),
+        ];
+        let (needed, optional) = law.keys();
+        let law_named = match self.film_law {
+            Some(law) => format!("film_law = \"{}\"", law.name()),
+            None => "a Newtonian film (no film_law)".into(),
+        };
+        for (name, _) in given.iter().filter(|(_, g)| *g) {
+            if !needed.contains(name) && !optional.contains(name) {
+                return Err(format!(
+                    "blank.interply.{name} is not a key of {law_named}: {} (docs/forming.md, \
+                     \"Layups\")",
+                    owner_of(name)
+                ));
+            }
+        }
+        if law == FilmLaw::Newtonian {
+            if self.film_viscosity.is_some() != self.film_thickness.is_some() {
+                return Err(
+                    "blank.interply.film_viscosity and film_thickness go together: give both, \
+                     or neither for Coulomb friction alone"
+                        .into(),
+                );
+            }
+            return Ok(());
+        }
+        match needed
+            .iter()
+            .find(|n| !given.iter().any(|(g, set)| g == *n && *set))
+        {
+            Some(name) => Err(format!(
+                "blank.interply.{name} is needed by {law_named} (docs/forming.md, \"Layups\")"
+            )),
+            None => Ok(()),
+        }
+    }
+}
+
+/// Which `film_law` a film key belongs to, said when it is given to another.
+fn owner_of(key: &str) -> &'static str {
+    match key {
+        "film_consistency" | "film_cutoff_rate" => {
+            "it belongs to film_law = \"power-law\" (a Newtonian or Cross film takes \
+             film_viscosity)"
+        }
+        "film_transition_stress" => "it belongs to film_law = \"cross\"",
+        "film_index" => "it belongs to film_law = \"power-law\" or \"cross\"",
+        _ => "a power-law film takes film_consistency (K, Pa·s^n) instead",
     }
 }
 
@@ -150,10 +347,11 @@ struct BlankTable {
 }
 
 impl BlankTable {
-    /// The blank, paths resolved against `folder`: a rectangle or a file, never both.
-    fn resolve(self, folder: &Path) -> Result<Blank, String> {
+    /// The blank, paths resolved against `folder`: a rectangle or a file, never both; a
+    /// layup's friction taken at the run's `temperature` (°C).
+    fn resolve(self, folder: &Path, temperature: f64) -> Result<Blank, String> {
         let card = folder.join(&self.card);
-        let layup = self.layup(&card, folder)?;
+        let layup = self.layup(&card, folder, temperature)?;
         let shape = match self.mesh {
             Some(mesh) => {
                 let rectangle_keys = [
@@ -205,8 +403,8 @@ impl BlankTable {
     }
 
     /// The layup of `blank.ply_angles` or `[[blank.plies]]` (never both), with
-    /// `blank.interply`; `None` for one ply.
-    fn layup(&self, card: &Path, folder: &Path) -> Result<Option<Layup>, String> {
+    /// `blank.interply` at `temperature` (°C); `None` for one ply.
+    fn layup(&self, card: &Path, folder: &Path, temperature: f64) -> Result<Option<Layup>, String> {
         let plies: Vec<PlySpec> = match (&self.ply_angles, &self.plies) {
             (Some(_), Some(_)) => {
                 return Err(
@@ -275,9 +473,11 @@ impl BlankTable {
             "a layup needs blank.interply.friction, the Coulomb friction between its plies \
              (docs/model.md, \"Friction through the molten film\")",
         )?;
+        // a table is read at the run's temperature: that must be a temperature first
+        TEMPERATURE.check("process.temperature", temperature)?;
         Ok(Some(Layup {
             plies,
-            interply: interply.friction()?,
+            interply: interply.friction(temperature)?,
             from_angles: self.ply_angles.is_some(),
         }))
     }
@@ -609,7 +809,10 @@ impl Scenario {
         let folder = path.parent().unwrap_or(Path::new("."));
         let scenario = Scenario {
             origin: origin.clone(),
-            blank: file.blank.resolve(folder).map_err(error)?,
+            blank: file
+                .blank
+                .resolve(folder, file.process.temperature)
+                .map_err(error)?,
             boundary: file.boundary,
             tools: file.tools.resolve(folder).map_err(error)?,
             process: file.process,
@@ -772,7 +975,7 @@ impl Scenario {
         self.check_layup_ranges()
     }
 
-    /// The layup's angles and the film's values within their ranges, each named by its key.
+    /// The layup's angles within their range, each named by its key.
     fn check_layup_ranges(&self) -> Result<(), String> {
         let Some(layup) = &self.blank.layup else {
             return Ok(());
@@ -784,15 +987,8 @@ impl Scenario {
             };
             ANGLE.check(&key, ply.angle)?;
         }
-        let f = &layup.interply;
-        FRICTION.check("blank.interply.friction", f.coulomb)?;
-        FILM_VISCOSITY.check(
-            "blank.interply.film_viscosity (over its thickness)",
-            f.film * 1e6,
-        )?;
-        if f.shear_cap.is_finite() {
-            FILM_YIELD.check("blank.interply.yield_stress", f.shear_cap)?;
-        }
+        // the film's values are checked as they are read, at the run's temperature
+        // (InterplyTable::friction)
         Ok(())
     }
 
@@ -1008,6 +1204,108 @@ fn parse_scalar(raw: &str) -> toml::Value {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn interply(text: &str) -> InterplyTable {
+        toml::from_str(text).unwrap()
+    }
+
+    /// A table gives its values at its temperatures and the straight line between them halfway;
+    /// a number is the same at any temperature.
+    #[test]
+    fn interply_tables_interpolate_at_the_run_temperature() {
+        let table = interply(
+            "friction = [[280.0, 0.3], [320.0, 0.2]]\n\
+             film_viscosity = [[280.0, 294.0], [300.0, 186.0], [320.0, 122.0]]\n\
+             film_thickness = 0.01\n\
+             yield_stress = [[280.0, 0.12], [320.0, 0.08]]\n",
+        );
+        let at = |t: f64| table.friction(t).unwrap();
+        assert_eq!(at(280.0).coulomb, 0.3);
+        assert_eq!(at(320.0).shear_cap, 0.08);
+        assert_eq!(at(300.0).film, 1e-6 * 186.0 / 0.01);
+        let mid = at(300.0);
+        assert!((mid.coulomb - 0.25).abs() < 1e-15 && (mid.shear_cap - 0.1).abs() < 1e-15);
+        let eta = at(310.0).film * 0.01 / 1e-6;
+        assert!(
+            (eta - 154.0).abs() < 1e-9,
+            "{eta} Pa·s halfway from 186 to 122"
+        );
+        let number = interply("friction = 0.2\n");
+        assert_eq!(number.friction(-50.0).unwrap(), FilmFriction::coulomb(0.2));
+        assert_eq!(number.friction(900.0).unwrap(), FilmFriction::coulomb(0.2));
+    }
+
+    /// The shear-thinning laws read from their keys, in the model's units.
+    #[test]
+    fn interply_film_laws_are_read_in_the_models_units() {
+        let cross = interply(
+            "friction = 0.2\nfilm_law = \"cross\"\nfilm_viscosity = 186.0\n\
+             film_thickness = 0.01\nfilm_index = 0.4\nfilm_transition_stress = 0.02\n",
+        );
+        assert_eq!(
+            cross.friction(300.0).unwrap(),
+            FilmFriction::cross(0.2, (186e-6, 0.4, 0.02), 0.01, f64::INFINITY)
+        );
+        let power = interply(
+            "friction = 0.2\nfilm_law = \"power-law\"\nfilm_consistency = 3100.0\n\
+             film_thickness = 0.01\nfilm_index = 0.4\nyield_stress = 0.1\n",
+        );
+        assert_eq!(
+            power.friction(300.0).unwrap(),
+            FilmFriction::power_law(0.2, (3.1e-3, 0.4, DEFAULT_CUTOFF_RATE), 0.01, 0.1)
+        );
+    }
+
+    /// Tables outside the run's temperature or not increasing, values out of range and keys
+    /// of another law are refused, naming the key.
+    #[test]
+    fn bad_interply_values_are_refused_naming_the_key() {
+        let cases = [
+            (
+                "friction = [[310.0, 0.2], [320.0, 0.3]]",
+                "blank.interply.friction is given from 310 to 320 °C, and process.temperature \
+                 = 300 °C lies outside",
+            ),
+            (
+                "friction = [[300.0, 0.2], [280.0, 0.3]]",
+                "temperatures of blank.interply.friction must increase strictly",
+            ),
+            (
+                "friction = [[280.0, 0.2], [320.0, 7.0]]",
+                "blank.interply.friction (pair 2, at 320 °C) = 7 is out of range",
+            ),
+            ("friction = []", "blank.interply.friction is empty"),
+            (
+                "friction = 0.2\nyield_stress = [[280.0, 0.1], [2000.0, 0.1]]",
+                "blank.interply.yield_stress (pair 2, its temperature) = 2000 °C",
+            ),
+            (
+                "friction = 0.2\nfilm_index = 0.4",
+                "blank.interply.film_index is not a key of a Newtonian film",
+            ),
+            (
+                "friction = 0.2\nfilm_law = \"cross\"\nfilm_thickness = 0.01",
+                "blank.interply.film_viscosity is needed by film_law = \"cross\"",
+            ),
+            (
+                "friction = 0.2\nfilm_law = \"power-law\"\nfilm_viscosity = 100.0",
+                "blank.interply.film_viscosity is not a key of film_law = \"power-law\"",
+            ),
+            (
+                "friction = 0.2\nfilm_law = \"power-law\"\nfilm_consistency = 3e3\n\
+                 film_thickness = 0.01\nfilm_index = 1.5",
+                "blank.interply.film_index = 1.5 is out of range",
+            ),
+            (
+                "friction = 0.2\nfilm_viscosity = 100.0\nfilm_thickness = 0.0",
+                "blank.interply.film_thickness = 0 mm is out of range",
+            ),
+        ];
+        for (text, expected) in cases {
+            let e = interply(text).friction(300.0).unwrap_err();
+            assert!(e.contains(expected), "{text}: {e}");
+        }
+    }
 
     #[test]
     fn overrides_set_nested_scalars_and_refuse_sections() {
