@@ -2,6 +2,7 @@
 #![allow(dead_code)]
 
 pub mod adversarial;
+pub mod calculix;
 
 use nalgebra::{Matrix3, Rotation3, Vector3};
 use proptest::prelude::*;
