@@ -38,10 +38,15 @@ fn formed(path: &str, extra: &[&str]) -> (FormingModel, Vec<f64>, f64) {
 /// plies' own resistance, which two plies have twice).
 #[test]
 fn two_plies_free_to_slide_form_as_two_single_plies() {
-    let (one, single_shear, single_force) = formed("tests/data/hemisphere-explicit.toml", &[]);
-    let (two, pair_shear, pair_force) = formed(
-        "examples/hemisphere-layup.toml",
-        &["blank.ply_angles=[0.0, 0.0]", "blank.interply.friction=0"],
+    // the two runs side by side
+    let ((one, single_shear, single_force), (two, pair_shear, pair_force)) = common::both(
+        || formed("tests/data/hemisphere-explicit.toml", &[]),
+        || {
+            formed(
+                "examples/hemisphere-layup.toml",
+                &["blank.ply_angles=[0.0, 0.0]", "blank.interply.friction=0"],
+            )
+        },
     );
     let cells = one.model.elements.len();
     assert_eq!(two.model.elements.len(), 2 * cells);

@@ -368,3 +368,34 @@ pub fn write_stl(path: &std::path::Path, facets: &[[[f64; 3]; 3]]) {
     text.push_str("endsolid tool\n");
     std::fs::write(path, text).unwrap();
 }
+
+/// `f` of each of `items`, each on a thread of its own, all at once; the results in the order
+/// of `items` (a panic in one is re-raised here). The solvers split their loops into fixed
+/// chunks of 256 elements, so a run on a few hundred cells keeps about one core busy: a test's
+/// independent runs side by side use the machine's other cores. Their results are the same
+/// bits as run one after the other (no solver's sums depend on the threads they run on).
+pub fn side_by_side<I: Send, T: Send>(items: Vec<I>, f: impl Fn(I) -> T + Sync) -> Vec<T> {
+    let f = &f;
+    std::thread::scope(|scope| {
+        let handles: Vec<_> = items
+            .into_iter()
+            .map(|item| scope.spawn(move || f(item)))
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+            .collect()
+    })
+}
+
+/// `a()` and `b()` side by side, as [`side_by_side`].
+pub fn both<A: Send, B: Send>(
+    a: impl FnOnce() -> A + Send,
+    b: impl FnOnce() -> B + Send,
+) -> (A, B) {
+    std::thread::scope(|scope| {
+        let a = scope.spawn(a);
+        let b = b();
+        (a.join().unwrap_or_else(|e| std::panic::resume_unwind(e)), b)
+    })
+}
