@@ -184,7 +184,7 @@ fn pulled_until(friction: FilmFriction, speed: f64, end: f64) -> (f64, f64, Stat
         deepest: 0.0,
         last: None,
     };
-    explicit::run(&model, &settings, &mut pull).unwrap();
+    common::on_the_pool(|| explicit::run(&model, &settings, &mut pull)).unwrap();
     let mean = pull.forces.iter().sum::<f64>() / pull.forces.len() as f64;
     eprintln!(
         "pull {mean:.4} N (records {:?}), deepest {:.4} mm",

@@ -323,7 +323,7 @@ pub fn form(
 ) {
     let scenario = thermostamp::forming::Scenario::load(&repo_path(file), overrides).unwrap();
     let forming = thermostamp::forming::FormingModel::new(&scenario).unwrap();
-    let result = thermostamp::forming::run::run(&forming, None, None);
+    let result = on_the_pool(|| thermostamp::forming::run::run(&forming, None, None));
     (forming, result)
 }
 
@@ -369,23 +369,23 @@ pub fn write_stl(path: &std::path::Path, facets: &[[[f64; 3]; 3]]) {
     std::fs::write(path, text).unwrap();
 }
 
-/// `f` of each of `items`, each on a thread of its own, all at once; the results in the order
-/// of `items` (a panic in one is re-raised here). The solvers split their loops into fixed
-/// chunks of 256 elements, so a run on a few hundred cells keeps about one core busy: a test's
-/// independent runs side by side use the machine's other cores. Their results are the same
-/// bits as run one after the other (no solver's sums depend on the threads they run on).
-pub fn side_by_side<I: Send, T: Send>(items: Vec<I>, f: impl Fn(I) -> T + Sync) -> Vec<T> {
-    let f = &f;
-    std::thread::scope(|scope| {
-        let handles: Vec<_> = items
-            .into_iter()
-            .map(|item| scope.spawn(move || f(item)))
-            .collect();
-        handles
-            .into_iter()
-            .map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
-            .collect()
-    })
+/// `f` of each of `items`, all at once on the threads of rayon's pool; the results in the
+/// order of `items` (a panic in one is re-raised here). The solvers split their loops into
+/// fixed chunks of 256 elements, so a run on a few hundred cells keeps about one core busy: a
+/// test's independent runs side by side use the machine's other cores. Each runs on a thread
+/// of the pool, where a loop of one chunk runs at once on that thread instead of being handed
+/// to the pool and waited for step after step as from the test's own thread. Their results
+/// are the same bits as run one after the other (no solver's sums depend on the threads).
+pub fn side_by_side<I: Send, T: Send>(items: Vec<I>, f: impl Fn(I) -> T + Sync + Send) -> Vec<T> {
+    use rayon::prelude::*;
+    items.into_par_iter().map(f).collect()
+}
+
+/// `f()` on a thread of rayon's pool, as [`side_by_side`] runs each job: a solver's loops over
+/// one chunk then run at once on that thread, not handed to the pool and waited for at every
+/// step. The same bits as from the test's own thread.
+pub fn on_the_pool<T: Send>(f: impl FnOnce() -> T + Send) -> T {
+    rayon::scope(|_| f())
 }
 
 /// `a()` and `b()` side by side, as [`side_by_side`].
@@ -393,9 +393,5 @@ pub fn both<A: Send, B: Send>(
     a: impl FnOnce() -> A + Send,
     b: impl FnOnce() -> B + Send,
 ) -> (A, B) {
-    std::thread::scope(|scope| {
-        let a = scope.spawn(a);
-        let b = b();
-        (a.join().unwrap_or_else(|e| std::panic::resume_unwind(e)), b)
-    })
+    rayon::join(a, b)
 }
