@@ -206,85 +206,91 @@ impl Observer for Work {
 /// work, and the strip has buckled (deflection above 5 mm).
 #[test]
 fn compressed_strip_buckles_at_the_euler_load() {
-    for pattern in PATTERNS {
-        strip_buckles_at_the_euler_load(pattern);
-    }
+    // the four runs (two meshes, warp along and across) are independent: side by side
+    let cases: Vec<(DiagonalPattern, bool)> = PATTERNS
+        .iter()
+        .flat_map(|&pattern| [(pattern, true), (pattern, false)])
+        .collect();
+    common::side_by_side(cases, |(pattern, along)| {
+        strip_buckles_at_the_euler_load(pattern, along)
+    });
 }
 
-fn strip_buckles_at_the_euler_load(pattern: DiagonalPattern) {
+/// The strip on `pattern`, its warp along it (`along`) or across.
+fn strip_buckles_at_the_euler_load(pattern: DiagonalPattern, along: bool) {
     let card = MaterialCard::load(&common::repo_path("tests/data/bending-strip.toml")).unwrap();
     let rigidity = card.bending.unwrap().at(20.0).unwrap();
     let (length, width, shortening) = (100.0, 10.0, 1.0);
-    for (warp, b) in [(Vector3::x(), rigidity.warp), (Vector3::y(), rigidity.weft)] {
-        // 12 periods of the first bending mode, omega_1 = (pi/L)^2 sqrt(B / (rho t))
-        let omega = (std::f64::consts::PI / length).powi(2) * (b / (card.density * 0.3)).sqrt();
-        let duration = 12.0 * 2.0 * std::f64::consts::PI / omega;
-        let mut mesh = rectangle(length, width, 20, 2, pattern);
-        for p in &mut mesh.nodes {
-            p.z = 0.05 * (std::f64::consts::PI * (p.x / length + 0.5)).sin();
-        }
-        let ends = |side: &str| mesh.node_set(side).unwrap().to_vec();
-        let (left, right) = (ends("left"), ends("right"));
-        let speed = shortening / duration;
-        let constraints = vec![
-            Constraint {
-                name: "left".into(),
-                nodes: left,
-                motion: Motion::Fixed,
-            },
-            Constraint {
-                name: "right".into(),
-                nodes: right,
-                motion: Motion::Velocity(Arc::new(move |_, _| Vector3::new(-speed, 0.0, 0.0))),
-            },
-        ];
-        let model = Model::new(
-            mesh,
-            card.laminate.clone(),
-            card.density,
-            20.0,
-            warp,
-            constraints,
-        )
-        .unwrap()
-        .with_bending(rigidity)
-        .unwrap();
-        let settings = SolverSettings {
-            end_time: duration,
-            time_step_safety: 0.9,
-            target_time_step: None,
-            output_interval: duration / 50.0,
-            damping: 0.0,
-            yarn_damping: 0.06,
-        };
-        let mut work = Work::default();
-        let state = solver::run(&model, &settings, &mut work).unwrap();
-        let euler = std::f64::consts::PI.powi(2) * b * width / length.powi(2);
-        // over the last half of the shortening, well past buckling
-        let (&(t0, w0), &(t1, w1)) = (&work.0[25], work.0.last().unwrap());
-        let force = (w1 - w0) / (speed * (t1 - t0));
-        eprintln!(
-            "{pattern:?}, B = {b}: end force / Euler load = {:.4}",
-            force / euler
-        );
-        assert!(
-            (force / euler - 1.0).abs() < 0.05,
-            "{pattern:?}, B = {b}: end force {force} N, Euler load {euler} N"
-        );
-        let e = &state.energies;
-        assert!(
-            e.balance_error() < 0.01,
-            "B = {b}: energy balance error {}",
-            e.balance_error()
-        );
-        let deflection = state
-            .positions
-            .iter()
-            .map(|p| p.z.abs())
-            .fold(0.0, f64::max);
-        assert!(
-            deflection > 5.0,
-            "B = {b}: the strip did not buckle ({deflection} mm)"
-        );
+    let cases = [(Vector3::x(), rigidity.warp), (Vector3::y(), rigidity.weft)];
+    let (warp, b) = cases[usize::from(!along)];
+    // 12 periods of the first bending mode, omega_1 = (pi/L)^2 sqrt(B / (rho t))
+    let omega = (std::f64::consts::PI / length).powi(2) * (b / (card.density * 0.3)).sqrt();
+    let duration = 12.0 * 2.0 * std::f64::consts::PI / omega;
+    let mut mesh = rectangle(length, width, 20, 2, pattern);
+    for p in &mut mesh.nodes {
+        p.z = 0.05 * (std::f64::consts::PI * (p.x / length + 0.5)).sin();
     }
+    let ends = |side: &str| mesh.node_set(side).unwrap().to_vec();
+    let (left, right) = (ends("left"), ends("right"));
+    let speed = shortening / duration;
+    let constraints = vec![
+        Constraint {
+            name: "left".into(),
+            nodes: left,
+            motion: Motion::Fixed,
+        },
+        Constraint {
+            name: "right".into(),
+            nodes: right,
+            motion: Motion::Velocity(Arc::new(move |_, _| Vector3::new(-speed, 0.0, 0.0))),
+        },
+    ];
+    let model = Model::new(
+        mesh,
+        card.laminate.clone(),
+        card.density,
+        20.0,
+        warp,
+        constraints,
+    )
+    .unwrap()
+    .with_bending(rigidity)
+    .unwrap();
+    let settings = SolverSettings {
+        end_time: duration,
+        time_step_safety: 0.9,
+        target_time_step: None,
+        output_interval: duration / 50.0,
+        damping: 0.0,
+        yarn_damping: 0.06,
+    };
+    let mut work = Work::default();
+    let state = solver::run(&model, &settings, &mut work).unwrap();
+    let euler = std::f64::consts::PI.powi(2) * b * width / length.powi(2);
+    // over the last half of the shortening, well past buckling
+    let (&(t0, w0), &(t1, w1)) = (&work.0[25], work.0.last().unwrap());
+    let force = (w1 - w0) / (speed * (t1 - t0));
+    eprintln!(
+        "{pattern:?}, B = {b}: end force / Euler load = {:.4}",
+        force / euler
+    );
+    assert!(
+        (force / euler - 1.0).abs() < 0.05,
+        "{pattern:?}, B = {b}: end force {force} N, Euler load {euler} N"
+    );
+    let e = &state.energies;
+    assert!(
+        e.balance_error() < 0.01,
+        "B = {b}: energy balance error {}",
+        e.balance_error()
+    );
+    let deflection = state
+        .positions
+        .iter()
+        .map(|p| p.z.abs())
+        .fold(0.0, f64::max);
+    assert!(
+        deflection > 5.0,
+        "B = {b}: the strip did not buckle ({deflection} mm)"
+    );
 }

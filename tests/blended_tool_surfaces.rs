@@ -97,12 +97,8 @@ fn the_hemisphere_between_stl_tools_forms_as_between_exact_ones() {
     let dir = scratch_dir("blended", "hemisphere");
     let exact =
         FormingModel::new(&load(&dir, "exact.toml", &hemisphere(&built_in_tools(3.0)))).unwrap();
-    let (exact_run, exact_shear, exact_peak) = formed(&exact);
-    assert!(
-        exact_shear > 20.0,
-        "too little shear to compare: {exact_shear}°"
-    );
-    for resolution in [3.0, 1.0] {
+    let resolutions = [3.0, 1.0];
+    let from_files = resolutions.map(|resolution| {
         let cut = FormingModel::new(&load(
             &dir,
             &format!("built-in-{resolution}.toml"),
@@ -126,7 +122,17 @@ fn the_hemisphere_between_stl_tools_forms_as_between_exact_ones() {
             .tools
             .iter()
             .all(|t| t.blended_surface().is_some() && t.exact_surface().is_none()));
-        let (blended_run, shear, peak) = formed(&files);
+        files
+    });
+    // the three runs side by side
+    let mut runs = common::side_by_side(vec![&exact, &from_files[0], &from_files[1]], formed);
+    let blended = runs.split_off(1);
+    let (exact_run, exact_shear, exact_peak) = runs.pop().unwrap();
+    assert!(
+        exact_shear > 20.0,
+        "too little shear to compare: {exact_shear}°"
+    );
+    for (resolution, (blended_run, shear, peak)) in resolutions.iter().zip(blended) {
         println!(
             "{resolution} mm facets: exact shear {exact_shear:.2}°, peak {exact_peak:.2} N, \
              (increments, iterations) {:?}; blended {shear:.2}°, {peak:.2} N, {:?}",
@@ -260,8 +266,9 @@ fn a_cup_over_stl_tools_forms_implicitly_as_explicitly() {
         "explicit.toml",
         "solver = \"explicit\"\ntime_scaling = 10.0\ntarget_time_step = 5e-6",
     );
-    let (implicit_run, implicit_shear, implicit_peak) = formed(&implicit);
-    let (_, explicit_shear, explicit_peak) = formed(&explicit);
+    // the two runs side by side
+    let ((implicit_run, implicit_shear, implicit_peak), (_, explicit_shear, explicit_peak)) =
+        common::both(|| formed(&implicit), || formed(&explicit));
     println!(
         "cup: implicit {implicit_shear:.2}°, {implicit_peak:.2} N, (increments, iterations) {:?}; \
          explicit {explicit_shear:.2}°, {explicit_peak:.2} N",

@@ -3,67 +3,15 @@
 //! by the same writer shows that CalculiX takes each element's orientation and thickness.
 //!
 //! Without `ccx` on the PATH these tests fail when `CI` is set (CI installs it: `.ci/run`) and
-//! are skipped, with a printed line, otherwise.
+//! are skipped, with a printed line, otherwise (`tests/common/calculix.rs`).
 
 mod common;
 
+use common::calculix::{ccx_available, dat_rows, run_ccx};
 use common::{run_ok, scratch_dir};
 use nalgebra::Vector3;
-use std::path::Path;
-use std::process::Command;
 use thermostamp::mesh::abaqus::{write_inp, ElementOutput};
 use thermostamp::mesh::{rectangle, DiagonalPattern};
-
-/// Whether `ccx` can be run; `false` (skip) only outside CI.
-fn ccx_available(test: &str) -> bool {
-    let found = Command::new("ccx").arg("-v").output().is_ok();
-    common::reader_available(found, test, "CalculiX (ccx, Debian package calculix-ccx)")
-}
-
-/// Runs `ccx` on `dir/job.inp` and returns its standard output, after checking that it read
-/// every card (no `*WARNING`, no `*ERROR`) and finished. Its exit code is checked too, though
-/// CalculiX 2.20 exits with 0 even when it cannot open the input file.
-fn run_ccx(dir: &Path) -> String {
-    let out = Command::new("ccx")
-        .args(["-i", "job"])
-        .current_dir(dir)
-        .env("OMP_NUM_THREADS", "1")
-        .output()
-        .unwrap();
-    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
-    assert!(out.status.success(), "ccx failed:\n{stdout}");
-    for bad in ["*WARNING", "*ERROR"] {
-        assert!(
-            !stdout.contains(bad),
-            "ccx: {bad} reading the deck:\n{stdout}"
-        );
-    }
-    assert!(
-        stdout.contains("Job finished"),
-        "ccx did not finish:\n{stdout}"
-    );
-    stdout
-}
-
-/// The rows of the `.dat` block whose title contains `title`: each line's last three numbers,
-/// up to the first line without numbers after them.
-fn dat_rows(dat: &str, title: &str) -> Vec<[f64; 3]> {
-    let mut rows = Vec::new();
-    let mut lines = dat.lines().skip_while(|l| !l.contains(title)).skip(1);
-    for line in lines.by_ref() {
-        let numbers: Vec<f64> = line
-            .split_whitespace()
-            .filter_map(|f| f.parse().ok())
-            .collect();
-        if numbers.len() >= 3 {
-            let n = numbers.len();
-            rows.push([numbers[n - 3], numbers[n - 2], numbers[n - 1]]);
-        } else if !rows.is_empty() {
-            break;
-        }
-    }
-    rows
-}
 
 /// The hemisphere example, 10 mm cells, 4 mm of stroke: its `formed-blank.inp`, included
 /// unchanged in a deck with an elastic material, the `left` edge clamped and 1 N a node on the

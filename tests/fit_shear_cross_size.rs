@@ -67,9 +67,19 @@ fn a_card_fitted_on_one_specimen_predicts_two_others() {
         100.0 * fit.rms_of_mean
     );
     let fitted = laminate_with_shear(&card, &fit.law()).unwrap();
-    for (width, length) in [(100.0, 200.0), (200.0, 600.0)] {
-        let known = bias_rows(&card.laminate, card.density, width, length);
-        let predicted = bias_rows(&fitted, card.density, width, length);
+    // the four runs (each specimen of the card and of the fit) side by side
+    let specimens = [(100.0, 200.0), (200.0, 600.0)];
+    let runs: Vec<(&Laminate, (f64, f64))> = specimens
+        .iter()
+        .flat_map(|&size| [(&card.laminate, size), (&fitted, size)])
+        .collect();
+    let mut histories = common::side_by_side(runs, |(laminate, (width, length))| {
+        bias_rows(laminate, card.density, width, length)
+    })
+    .into_iter();
+    for (width, length) in specimens {
+        let known = histories.next().unwrap();
+        let predicted = histories.next().unwrap();
         let pairs: Vec<(f64, f64)> = known
             .iter()
             .zip(&predicted)

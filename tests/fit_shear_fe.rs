@@ -101,7 +101,7 @@ fn surrogate_jacobian_is_the_derivative_of_the_analytic_model() {
 fn fe_curve(settings: &RefineSettings, card: &MaterialCard, c: &[f64], end: f64) -> ForceCurve {
     let test = settings.bias_extension(card, end).unwrap();
     let laminate = laminate_with_shear(card, &ShearInteraction::new(c.to_vec())).unwrap();
-    let run = test.run(&laminate, card.density, None, None).unwrap();
+    let run = common::on_the_pool(|| test.run(&laminate, card.density, None, None)).unwrap();
     assert!(run.run.outcome.is_ok());
     let rows: Vec<_> = run.rows.iter().step_by(2).collect();
     ForceCurve {
@@ -152,7 +152,10 @@ fn refinement_recovers_the_coefficients_behind_an_fe_curve() {
         100.0 * start_error
     );
 
-    let fit = refine_shear_fe(&data, &card, &analytic.law(), &settings, &mut print_run).unwrap();
+    let fit = common::on_the_pool(|| {
+        refine_shear_fe(&data, &card, &analytic.law(), &settings, &mut print_run)
+    })
+    .unwrap();
     let error = shear_force_error(&fit.coefficients, &truth, t, max_deg);
     println!(
         "refined {:?} ± {:?} ({:?} after {} iterations): F_sh off by up to {:.2} %",

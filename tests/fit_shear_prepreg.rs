@@ -28,7 +28,7 @@ const FRAME: ShearTest = ShearTest::PictureFrame {
 /// 60 mm of pull), points from 1 mm on.
 fn fe_curve(card: &MaterialCard) -> (ForceCurve, f64) {
     let test = PictureFrame::standard(300.0);
-    let run = test.run(&card.laminate, card.density, None, None).unwrap();
+    let run = common::on_the_pool(|| test.run(&card.laminate, card.density, None, None)).unwrap();
     let rows: Vec<_> = run.rows.iter().filter(|r| r.displacement > 1.0).collect();
     let curve = ForceCurve {
         origin: "FE picture frame".into(),

@@ -66,7 +66,7 @@ fn double_dome_shear_is_symmetric_and_follows_the_pin_jointed_net() {
 /// kinetic energy below 5 % of the internal energy once the blank carries load.
 fn check_against_the_net(scenario: &Scenario) {
     let forming = FormingModel::new(scenario).unwrap();
-    let result = run::run(&forming, None, None);
+    let result = common::on_the_pool(|| run::run(&forming, None, None));
     let state = result.outcome.as_ref().unwrap();
     let maxima = quadrant_maxima(&forming, &state.positions);
     let (lo, hi) = (

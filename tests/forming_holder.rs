@@ -22,7 +22,7 @@ fn flange_wrinkles(holder: &str) -> Wrinkles {
     )
     .unwrap();
     let forming = FormingModel::new(&scenario).unwrap();
-    let result = run::run(&forming, None, None);
+    let result = common::on_the_pool(|| run::run(&forming, None, None));
     assert!(result.outcome.is_ok(), "{:?}", result.outcome.err());
     result.records.last().unwrap().wrinkles
 }

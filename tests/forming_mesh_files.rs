@@ -103,6 +103,8 @@ fn largest_difference(reference: &[(Vector3<f64>, f64)], other: &[(Vector3<f64>,
     largest_twin_difference(reference, other, 0.1)
 }
 
+/// The five runs (built-in blank in triangles and in quadrilaterals, the two blank files, the
+/// STL tools) are independent: they run side by side.
 #[test]
 fn imported_blanks_and_tools_form_like_the_built_in_ones() {
     let dir = scratch_dir("forming", "mesh-files");
@@ -111,7 +113,38 @@ fn imported_blanks_and_tools_form_like_the_built_in_ones() {
         "built-in.toml",
         &scenario_text(RECTANGLE, BUILT_IN_TOOLS),
     );
-    let reference_run = formed(&built_in);
+    let quads = load(
+        &dir,
+        "built-in-quad.toml",
+        &scenario_text(QUAD_RECTANGLE, BUILT_IN_TOOLS),
+    );
+    let files = ["hemisphere-blank-10mm.msh", "hemisphere-blank-10mm.inp"];
+    let from_files = files.map(|file| {
+        let mesh = repo_path(&format!("tests/data/meshes/{file}"));
+        let blank = format!("mesh = {:?}", mesh);
+        load(
+            &dir,
+            &format!("mesh-{file}.toml"),
+            &scenario_text(&blank, BUILT_IN_TOOLS),
+        )
+    });
+    // the built-in tools written as STL files
+    let mut tools = String::from("shape = \"files\"\nflange_radius = 47.0\n");
+    let built_in_model = FormingModel::new(&built_in).unwrap();
+    for (k, key) in ["punch", "die", "holder"].iter().enumerate() {
+        let path = dir.join(format!("{key}.stl"));
+        let surface = &built_in_model.model.tools[k].surface;
+        write_stl_ascii(&path, surface, key).unwrap();
+        tools.push_str(&format!("{key} = {{ file = {:?} }}\n", path));
+    }
+    let stl = load(&dir, "stl.toml", &scenario_text(RECTANGLE, &tools));
+
+    let scenarios = vec![&built_in, &quads, &from_files[0], &from_files[1], &stl];
+    let [reference_run, quad_run, msh_run, inp_run, stl_run]: [Formed; 5] =
+        common::side_by_side(scenarios, formed)
+            .try_into()
+            .unwrap_or_else(|_| unreachable!());
+
     check_export(&dir, &reference_run);
     let reference = &reference_run.shear;
     let largest = reference.iter().map(|r| r.1.abs()).fold(0.0, f64::max);
@@ -119,12 +152,6 @@ fn imported_blanks_and_tools_form_like_the_built_in_ones() {
     assert!(largest > 5.0, "too little shear to compare: {largest}°");
 
     // the files' quadrilaterals against the built-in blank in quadrilaterals
-    let quads = load(
-        &dir,
-        "built-in-quad.toml",
-        &scenario_text(QUAD_RECTANGLE, BUILT_IN_TOOLS),
-    );
-    let quad_run = formed(&quads);
     check_export(&scratch_dir("forming", "mesh-files-quad"), &quad_run);
     assert!(quad_run
         .forming
@@ -137,11 +164,7 @@ fn imported_blanks_and_tools_form_like_the_built_in_ones() {
     let largest = quad_reference.iter().map(|r| r.1.abs()).fold(0.0, f64::max);
     println!("built-in, quadrilaterals: largest shear {largest:.2}°");
     assert!(largest > 5.0, "too little shear to compare: {largest}°");
-    for file in ["hemisphere-blank-10mm.msh", "hemisphere-blank-10mm.inp"] {
-        let mesh = repo_path(&format!("tests/data/meshes/{file}"));
-        let blank = format!("mesh = {:?}", mesh);
-        let scenario = load(&dir, "mesh.toml", &scenario_text(&blank, BUILT_IN_TOOLS));
-        let run = formed(&scenario);
+    for (file, run) in files.iter().zip([msh_run, inp_run]) {
         assert_eq!(
             run.forming.model.mesh.cells.len(),
             256,
@@ -152,15 +175,7 @@ fn imported_blanks_and_tools_form_like_the_built_in_ones() {
         assert!(difference < 0.5, "{file}: {difference}°");
     }
 
-    let mut tools = String::from("shape = \"files\"\nflange_radius = 47.0\n");
-    for (k, key) in ["punch", "die", "holder"].iter().enumerate() {
-        let path = dir.join(format!("{key}.stl"));
-        let surface = &reference_run.forming.model.tools[k].surface;
-        write_stl_ascii(&path, surface, key).unwrap();
-        tools.push_str(&format!("{key} = {{ file = {:?} }}\n", path));
-    }
-    let scenario = load(&dir, "stl.toml", &scenario_text(RECTANGLE, &tools));
-    let difference = largest_difference(reference, &formed(&scenario).shear);
+    let difference = largest_difference(reference, &stl_run.shear);
     println!("STL tools: largest difference {difference:.2e}°");
     assert!(difference < 0.5, "STL tools: {difference}°");
 }

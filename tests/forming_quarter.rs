@@ -32,8 +32,11 @@ fn formed(example: &str, overrides: &[&str]) -> (f64, Vec<(Vector3<f64>, f64)>) 
 
 #[test]
 fn the_quarter_model_forms_as_a_quarter_of_the_whole() {
-    let (full_force, full) = formed("examples/hemisphere.toml", &[STROKE, "blank.pattern=quad"]);
-    let (quarter_force, quarter) = formed("examples/hemisphere-quarter.toml", &[STROKE]);
+    // the two runs side by side
+    let ((full_force, full), (quarter_force, quarter)) = common::both(
+        || formed("examples/hemisphere.toml", &[STROKE, "blank.pattern=quad"]),
+        || formed("examples/hemisphere-quarter.toml", &[STROKE]),
+    );
     assert_eq!(4 * quarter.len(), full.len());
     let worst = largest_twin_difference(&full, &quarter, 0.5);
     let largest = quarter.iter().map(|q| q.1.abs()).fold(0.0, f64::max);

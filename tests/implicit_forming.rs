@@ -26,8 +26,11 @@ fn hemisphere(file: &str) -> (FormingModel, FormingRun) {
 /// apart, draw-in 0.02 mm (figures of the full-size part are in docs/solver.md).
 #[test]
 fn implicit_hemisphere_forms_the_part_the_explicit_solver_forms() {
-    let (model, explicit) = hemisphere("tests/data/hemisphere-explicit.toml");
-    let (_, implicit) = hemisphere("examples/hemisphere.toml");
+    // the two runs side by side
+    let ((model, explicit), (_, implicit)) = common::both(
+        || hemisphere("tests/data/hemisphere-explicit.toml"),
+        || hemisphere("examples/hemisphere.toml"),
+    );
     let reference = explicit.outcome.expect("explicit run");
     let state = implicit
         .outcome
@@ -158,11 +161,16 @@ fn flange_without_holder(file: &str, extra: &[&str]) -> (Vec<f64>, f64) {
 /// 1.65 mm explicit (1.64 mm at the physical speed), waviness 2.89 against 3.01 mm (3.11 mm).
 #[test]
 fn without_a_holder_both_solvers_form_the_same_flange_waves_before_the_snap() {
-    let (explicit, explicit_waviness) = flange_without_holder(
-        "tests/data/hemisphere-explicit.toml",
-        &["process.time_scaling=3"],
+    // the two runs side by side
+    let ((explicit, explicit_waviness), (implicit, implicit_waviness)) = common::both(
+        || {
+            flange_without_holder(
+                "tests/data/hemisphere-explicit.toml",
+                &["process.time_scaling=3"],
+            )
+        },
+        || flange_without_holder("examples/hemisphere.toml", &[]),
     );
-    let (implicit, implicit_waviness) = flange_without_holder("examples/hemisphere.toml", &[]);
     let waves = common::dominant_waves(&explicit);
     assert_eq!(waves, 4, "explicit harmonics {explicit:?}");
     assert_eq!(
@@ -264,7 +272,8 @@ fn the_implicit_hemisphere_is_the_same_on_one_thread_and_on_two() {
         assert!(run.implicit.expect("an implicit run").iterations > 0);
         state.positions
     };
-    let (one, two) = (positions(1), positions(2));
+    // the two runs side by side
+    let (one, two) = common::both(|| positions(1), || positions(2));
     let moved = one.iter().zip(&two).filter(|(a, b)| a != b).count();
     assert_eq!(moved, 0, "{moved} nodes differ between one thread and two");
 }
@@ -303,8 +312,14 @@ fn conjugate_gradients_on_the_membrane_stencil_form_the_part_factorisations_form
             .expect("the run reaches the end of its stroke");
         (state.positions, stats)
     };
-    let (direct, by_factorisations) = run(usize::MAX, 2);
-    let (iterated, by_iterations) = run(0, 2);
+    // the three runs (the last on one thread) side by side
+    let mut runs =
+        common::side_by_side(vec![(usize::MAX, 2), (0, 2), (0, 1)], |(from, threads)| {
+            run(from, threads)
+        });
+    let (one_thread, _) = runs.pop().unwrap();
+    let (iterated, by_iterations) = runs.pop().unwrap();
+    let (direct, by_factorisations) = runs.pop().unwrap();
     assert_eq!(by_factorisations.cg_iterations, 0);
     assert!(
         by_iterations.cg_iterations > 0
@@ -333,7 +348,6 @@ fn conjugate_gradients_on_the_membrane_stencil_form_the_part_factorisations_form
     let sheared = a.iter().map(|a| a.1.abs()).fold(0.0, f64::max);
     assert!(sheared > 3.0, "the part shears: {sheared}°");
     assert!(shear < 0.05, "shear {shear}° apart");
-    let (one_thread, _) = run(0, 1);
     let moved = one_thread
         .iter()
         .zip(&iterated)

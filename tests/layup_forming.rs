@@ -4,6 +4,7 @@
 
 mod common;
 
+use common::calculix::{ccx_available, dat_rows, run_ccx};
 use common::{scratch_dir, thermostamp};
 use thermostamp::forming::run::{run, shear_angles};
 use thermostamp::forming::{FormingModel, Scenario};
@@ -37,10 +38,15 @@ fn formed(path: &str, extra: &[&str]) -> (FormingModel, Vec<f64>, f64) {
 /// plies' own resistance, which two plies have twice).
 #[test]
 fn two_plies_free_to_slide_form_as_two_single_plies() {
-    let (one, single_shear, single_force) = formed("tests/data/hemisphere-explicit.toml", &[]);
-    let (two, pair_shear, pair_force) = formed(
-        "examples/hemisphere-layup.toml",
-        &["blank.ply_angles=[0.0, 0.0]", "blank.interply.friction=0"],
+    // the two runs side by side
+    let ((one, single_shear, single_force), (two, pair_shear, pair_force)) = common::both(
+        || formed("tests/data/hemisphere-explicit.toml", &[]),
+        || {
+            formed(
+                "examples/hemisphere-layup.toml",
+                &["blank.ply_angles=[0.0, 0.0]", "blank.interply.friction=0"],
+            )
+        },
     );
     let cells = one.model.elements.len();
     assert_eq!(two.model.elements.len(), 2 * cells);
@@ -113,12 +119,7 @@ fn layup_example_runs_in_reduced_form() {
 /// CalculiX: the first ply's `left` edge clamped, 1 N a node on its `right` edge along z; the
 /// reaction on the clamped edge is the load applied.
 fn formed_layup_runs_in_calculix(dir: &std::path::Path) {
-    let found = std::process::Command::new("ccx").arg("-v").output().is_ok();
-    if !common::reader_available(
-        found,
-        "layup_example_runs_in_reduced_form",
-        "CalculiX (ccx)",
-    ) {
+    if !ccx_available("layup_example_runs_in_reduced_form") {
         return;
     }
     let deck = std::fs::read_to_string(dir.join("out").join("formed-blank.inp")).unwrap();
@@ -138,24 +139,11 @@ fn formed_layup_runs_in_calculix(dir: &std::path::Path) {
          *NODE PRINT, NSET=\"ply 1/left\", TOTALS=ONLY\nRF\n*END STEP\n",
     )
     .unwrap();
-    let out = std::process::Command::new("ccx")
-        .args(["-i", "job"])
-        .current_dir(dir)
-        .env("OMP_NUM_THREADS", "1")
-        .output()
-        .unwrap();
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(stdout.contains("Job finished"), "{stdout}");
-    assert!(
-        !stdout.contains("*WARNING") && !stdout.contains("*ERROR"),
-        "{stdout}"
-    );
+    run_ccx(dir);
     let dat = std::fs::read_to_string(dir.join("job.dat")).unwrap();
-    let fz: f64 = dat
-        .lines()
-        .skip_while(|l| !l.contains("total force"))
-        .find_map(|l| l.split_whitespace().nth(2).and_then(|f| f.parse().ok()))
-        .unwrap();
+    let total = dat_rows(&dat, "total force");
+    assert_eq!(total.len(), 1, "{dat}");
+    let fz = total[0][2];
     assert!(
         (fz + right as f64).abs() < 1e-6,
         "reaction {fz} N for {right} N applied"

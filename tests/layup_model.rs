@@ -163,8 +163,9 @@ fn separate_plies_move_as_each_alone_implicit() {
     let (alone, together) = alone_and_together(&sheets, &rigidity);
     assert_eq!(together.plies.len(), 2);
     assert_eq!(together.ply_of(together.elements.len() - 1).name, "b");
-    let runs: Vec<State> = alone.iter().map(implicit_run).collect();
-    let both = implicit_run(&together);
+    // the three runs side by side
+    let mut runs = common::side_by_side(alone.iter().chain([&together]).collect(), implicit_run);
+    let both = runs.pop().unwrap();
     for (p, run) in runs.iter().enumerate() {
         let (worst, moved) = difference(&both, &together, p, run);
         eprintln!("ply {p}: {worst:.3e} mm off its run alone, which moved {moved:.3} mm");
@@ -195,8 +196,9 @@ fn separate_plies_move_as_each_alone_explicit() {
         weft: 0.2,
     }; 2];
     let (alone, together) = alone_and_together(&sheets, &rigidity);
-    let runs: Vec<State> = alone.iter().map(explicit_run).collect();
-    let both = explicit_run(&together);
+    // the three runs side by side
+    let mut runs = common::side_by_side(alone.iter().chain([&together]).collect(), explicit_run);
+    let both = runs.pop().unwrap();
     for (p, run) in runs.iter().enumerate() {
         let ply = &together.plies[p];
         let mass: f64 = both.masses[ply.nodes.clone()].iter().sum();

@@ -58,8 +58,8 @@ fn mirror_mismatch(forming: &FormingModel, positions: &[nalgebra::Vector3<f64>])
 
 #[test]
 fn a_lubricated_blank_forms_symmetric_in_the_work_of_one_with_friction() {
-    let (forming, lubricated) = hemisphere(0.0);
-    let (_, dry) = hemisphere(0.2);
+    // the two runs side by side
+    let ((forming, lubricated), (_, dry)) = common::both(|| hemisphere(0.0), || hemisphere(0.2));
     for run in [&lubricated, &dry] {
         assert!(run.outcome.is_ok(), "{:?}", run.outcome.as_ref().err());
         assert_eq!(run.checks.warnings().count(), 0, "{:?}", run.checks);

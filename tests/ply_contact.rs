@@ -199,14 +199,14 @@ fn pulled_until(
                 damping: 0.0,
                 yarn_damping: 0.06,
             };
-            explicit::run(&model, &settings, &mut pull).unwrap();
+            common::on_the_pool(|| explicit::run(&model, &settings, &mut pull)).unwrap();
         }
         Solver::Implicit => {
             let mut settings = ImplicitSettings::new(end, END / 60.0);
             settings.max_increment = Some(END / 60.0);
             let mut stats = ImplicitStatistics::default();
-            implicit::run(&model, &settings, &mut pull, &mut stats).unwrap();
-            eprintln!("implicit: {stats:?}");
+            common::on_the_pool(|| implicit::run(&model, &settings, &mut pull, &mut stats))
+                .unwrap();
         }
     }
     let mean = pull.forces.iter().sum::<f64>() / pull.forces.len() as f64;
@@ -221,10 +221,26 @@ fn pulled_until(
     (mean, pull.deepest, pull.last.unwrap(), model)
 }
 
+/// The Coulomb pull-out (mu = 0.2 at 10 mm/s) on `threads` threads.
+fn coulomb_pull_out(threads: usize) -> (f64, f64, State, Model) {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap();
+    pool.install(|| pulled(FilmFriction::coulomb(0.2), 10.0))
+}
+
+/// The Coulomb pull-out on two threads, run once for the two tests that check it.
+fn coulomb_on_two_threads() -> &'static (f64, f64, State, Model) {
+    static RUN: std::sync::OnceLock<(f64, f64, State, Model)> = std::sync::OnceLock::new();
+    RUN.get_or_init(|| coulomb_pull_out(2))
+}
+
 #[test]
 fn coulomb_pull_out_needs_twice_mu_times_the_press_force() {
     let mu = 0.2;
-    let (pull, deepest, state, model) = pulled(FilmFriction::coulomb(mu), 10.0);
+    let (pull, deepest, state, model) = coulomb_on_two_threads();
+    let (pull, deepest) = (*pull, *deepest);
     let expected = 2.0 * mu * PRESS;
     assert!(
         (pull / expected - 1.0).abs() < 0.02,
@@ -246,7 +262,7 @@ fn coulomb_pull_out_needs_twice_mu_times_the_press_force() {
         "friction dissipated {dissipated} N·mm over a slip of {slip} mm"
     );
     assert!(e.balance_error() < 0.01, "energy balance {e:?}");
-    plies_in_the_frame(&model, &state, slip);
+    plies_in_the_frame(model, state, slip);
 }
 
 /// The frame a layup writes: each cell's ply, the plies' pressure on each node carrying both
@@ -278,23 +294,26 @@ fn plies_in_the_frame(model: &Model, state: &State, slip: f64) {
     assert!((most / slip - 1.0).abs() < 0.05, "slid {most} mm of {slip}");
 }
 
-/// The same pull-out on one thread and on two, once sliding: the same bits, by either solver.
+/// The Coulomb pull-out on one thread and on two, over the whole run (the two-thread run is
+/// the one [`coulomb_pull_out_needs_twice_mu_times_the_press_force`] checks): the same bits;
+/// and the implicit solver's, once sliding.
 #[test]
 fn a_layup_runs_the_same_on_any_thread_count() {
-    for solver in [Solver::Explicit, Solver::Implicit] {
-        same_on_any_thread_count(solver);
-    }
-}
-
-fn same_on_any_thread_count(solver: Solver) {
-    let run = |threads: usize| {
+    // the one-thread run beside the shared two-thread one
+    let ((.., one, _), (.., two, _)) = common::both(|| coulomb_pull_out(1), coulomb_on_two_threads);
+    same_state(one, two);
+    let implicit = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
             .unwrap();
-        pool.install(|| pulled_until(FilmFriction::coulomb(0.2), 10.0, 4.0 * RAMP, solver).2)
+        let law = FilmFriction::coulomb(0.2);
+        pool.install(|| pulled_until(law, 10.0, 4.0 * RAMP, Solver::Implicit).2)
     };
-    let (one, two) = (run(1), run(2));
+    same_state(&implicit(1), &implicit(2));
+}
+
+fn same_state(one: &State, two: &State) {
     assert_eq!(one.positions, two.positions);
     assert_eq!(one.reactions, two.reactions);
     assert_eq!(one.interply, two.interply);
@@ -309,18 +328,16 @@ fn same_on_any_thread_count(solver: Solver) {
 fn the_film_drags_in_proportion_to_the_speed() {
     let film = FilmFriction::newtonian(0.0, 5e-3, f64::INFINITY);
     let area = OUTER.0 * OUTER.1;
-    let pulls: Vec<f64> = [5.0, 10.0]
-        .iter()
-        .map(|&speed| {
-            let (pull, ..) = pulled(film, speed);
-            let expected = 2.0 * film.film * speed * area;
-            assert!(
-                (pull / expected - 1.0).abs() < 0.02,
-                "at {speed} mm/s: pull {pull} N against 2 eta v A / h = {expected} N"
-            );
-            pull
-        })
-        .collect();
+    // the two runs side by side
+    let speeds = vec![5.0, 10.0];
+    let pulls = common::side_by_side(speeds.clone(), |speed| pulled(film, speed).0);
+    for (&speed, &pull) in speeds.iter().zip(&pulls) {
+        let expected = 2.0 * film.film * speed * area;
+        assert!(
+            (pull / expected - 1.0).abs() < 0.02,
+            "at {speed} mm/s: pull {pull} N against 2 eta v A / h = {expected} N"
+        );
+    }
     assert!((pulls[1] / pulls[0] - 2.0).abs() < 0.02, "{pulls:?}");
 }
 

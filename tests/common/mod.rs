@@ -2,6 +2,7 @@
 #![allow(dead_code)]
 
 pub mod adversarial;
+pub mod calculix;
 
 use nalgebra::{Matrix3, Rotation3, Vector3};
 use proptest::prelude::*;
@@ -322,7 +323,7 @@ pub fn form(
 ) {
     let scenario = thermostamp::forming::Scenario::load(&repo_path(file), overrides).unwrap();
     let forming = thermostamp::forming::FormingModel::new(&scenario).unwrap();
-    let result = thermostamp::forming::run::run(&forming, None, None);
+    let result = on_the_pool(|| thermostamp::forming::run::run(&forming, None, None));
     (forming, result)
 }
 
@@ -366,4 +367,31 @@ pub fn write_stl(path: &std::path::Path, facets: &[[[f64; 3]; 3]]) {
     }
     text.push_str("endsolid tool\n");
     std::fs::write(path, text).unwrap();
+}
+
+/// `f` of each of `items`, all at once on the threads of rayon's pool; the results in the
+/// order of `items` (a panic in one is re-raised here). The solvers split their loops into
+/// fixed chunks of 256 elements, so a run on a few hundred cells keeps about one core busy: a
+/// test's independent runs side by side use the machine's other cores. Each runs on a thread
+/// of the pool, where a loop of one chunk runs at once on that thread instead of being handed
+/// to the pool and waited for step after step as from the test's own thread. Their results
+/// are the same bits as run one after the other (no solver's sums depend on the threads).
+pub fn side_by_side<I: Send, T: Send>(items: Vec<I>, f: impl Fn(I) -> T + Sync + Send) -> Vec<T> {
+    use rayon::prelude::*;
+    items.into_par_iter().map(f).collect()
+}
+
+/// `f()` on a thread of rayon's pool, as [`side_by_side`] runs each job: a solver's loops over
+/// one chunk then run at once on that thread, not handed to the pool and waited for at every
+/// step. The same bits as from the test's own thread.
+pub fn on_the_pool<T: Send>(f: impl FnOnce() -> T + Send) -> T {
+    rayon::scope(|_| f())
+}
+
+/// `a()` and `b()` side by side, as [`side_by_side`].
+pub fn both<A: Send, B: Send>(
+    a: impl FnOnce() -> A + Send,
+    b: impl FnOnce() -> B + Send,
+) -> (A, B) {
+    rayon::join(a, b)
 }
