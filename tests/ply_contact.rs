@@ -301,7 +301,7 @@ fn plies_in_the_frame(model: &Model, state: &State, slip: f64) {
 fn a_layup_runs_the_same_on_any_thread_count() {
     // the one-thread run beside the shared two-thread one
     let ((.., one, _), (.., two, _)) = common::both(|| coulomb_pull_out(1), coulomb_on_two_threads);
-    same_state(one, two);
+    same_state(&one, two);
     let implicit = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
