@@ -38,7 +38,11 @@ struct Iterate {
     /// it was lagged again with the normal forces reached.
     lags: Vec<Vec<Option<FrictionLag>>>,
     /// The same of each node on the plies below and above it, and the triangles its ply–ply
-    /// contact is held on.
+    /// contact is held on over the increment: those nearest at its start (a node that slides
+    /// past one meanwhile is measured from its plane, a difference of the slip times the angle
+    /// between neighbouring faces; taking the nearest again there restarted Newton's method on
+    /// most increments, 3,432 iterations against 2,647 on the two-ply hemisphere, the same
+    /// part).
     ply_lags: PlyLags,
     ply_faces: HeldFaces,
     refreshes: usize,
@@ -241,12 +245,8 @@ impl Iterate {
                 let motion = (&problem.state.positions[..], &self.x[..], problem.dt);
                 plies.refined_lags(&evaluation.interply, motion, FRICTION_LAG_CHANGE)
             });
-        let faces = self.faces_moved(problem, evaluation);
-        if tools.is_none() && plies.is_none() && faces.is_none() {
+        if tools.is_none() && plies.is_none() {
             return false;
-        }
-        if let Some(faces) = faces {
-            self.ply_faces = faces;
         }
         if let Some(better) = tools {
             self.lags = better;
@@ -261,20 +261,6 @@ impl Iterate {
         self.freezes = 0;
         self.projected = false;
         true
-    }
-
-    /// The triangles nearest to the ply–ply pairs at the iterate, where a node pressed on a
-    /// neighbouring ply has slid off the one it was held on; `None` otherwise.
-    fn faces_moved(&self, problem: &Problem, evaluation: &Evaluation) -> Option<HeldFaces> {
-        let plies = problem.evaluator.plies?;
-        let now = held_faces(plies, &problem.state.interply, &self.x);
-        let moved = evaluation.interply.iter().enumerate().any(|(a, c)| {
-            (0..2).any(|side| {
-                c.sides[side].normal_force > 0.0
-                    && now[a][side].map(|f| f.0) != self.ply_faces[a][side].map(|f| f.0)
-            })
-        });
-        moved.then_some(now)
     }
 
     /// The residual is within its tolerance: the increment's solution (`Ok`), unless a node
