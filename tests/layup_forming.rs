@@ -218,3 +218,46 @@ fn the_two_solvers_agree_on_a_two_ply_layup() {
     }
     eprintln!("punch force implicit {implicit_force:.3} N, explicit {explicit_force:.3} N");
 }
+
+/// Any ply's key and the friction between the plies are scenario keys like the others: set
+/// from the command line (a list's element by its place from 1) and swept by a study, whose
+/// `--list` loads the first case; a place the layup does not have exits 2 naming it.
+#[test]
+fn a_study_sweeps_a_ply_angle_and_the_interply_friction() {
+    let scenario = Scenario::load(
+        &common::repo_path("examples/hemisphere-layup.toml"),
+        &["blank.ply_angles[2]=30".to_string()],
+    )
+    .unwrap();
+    let layup = scenario.blank.layup.as_ref().unwrap();
+    let angles: Vec<f64> = layup.plies.iter().map(|p| p.angle).collect();
+    assert_eq!(angles, [0.0, 30.0, 45.0, 0.0]);
+    let dir = scratch_dir("layup", "study");
+    let base = common::repo_path("examples/hemisphere-layup.toml");
+    let study = |parameters: &str| {
+        let path = dir.join("study.toml");
+        let text = format!(
+            "base = {:?}\n[parameters]\n{parameters}\n",
+            base.display().to_string()
+        );
+        std::fs::write(&path, text).unwrap();
+        thermostamp(&["sweep", path.to_str().unwrap(), "--list"])
+    };
+    let listed =
+        study("\"blank.ply_angles[2]\" = [0.0, 30.0]\n\"blank.interply.friction\" = [0.1, 0.4]");
+    let text = String::from_utf8_lossy(&listed.stdout);
+    assert_eq!(
+        listed.status.code(),
+        Some(0),
+        "{text}{}",
+        String::from_utf8_lossy(&listed.stderr)
+    );
+    assert!(
+        text.contains("blank.ply_angles[2] = 30") && text.contains("blank.interply.friction = 0.4"),
+        "{text}"
+    );
+    let refused = study("\"blank.ply_angles[9]\" = [0.0, 30.0]");
+    let message = String::from_utf8_lossy(&refused.stderr);
+    assert_eq!(refused.status.code(), Some(2), "{message}");
+    assert!(message.contains("ply_angles[9]"), "{message}");
+}

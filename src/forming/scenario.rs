@@ -1136,7 +1136,9 @@ impl Tools {
 }
 
 /// `section.key=value` (any depth): sets an existing or new scalar; the value is read as TOML
-/// (a number, a quoted string, true/false), a bare word as a string.
+/// (a number, a quoted string, true/false, a list), a bare word as a string. A key may name an
+/// existing element of a list by its place from 1, `blank.ply_angles[2]` or
+/// `blank.plies[2].angle`: any ply's key can be set, and swept.
 fn apply_override(table: &mut toml::Table, assignment: &str) -> Result<(), String> {
     let (path, raw) = assignment
         .split_once('=')
@@ -1149,23 +1151,63 @@ fn apply_override(table: &mut toml::Table, assignment: &str) -> Result<(), Strin
     let (last, parents) = keys.split_last().unwrap_or((&"", &[]));
     let mut here = table;
     for key in parents {
-        here = here
-            .entry(key.to_string())
-            .or_insert_with(|| toml::Value::Table(toml::Table::new()))
+        let (name, index) = indexed(key).map_err(|e| format!("--set {assignment}: {e}"))?;
+        let entry = match index {
+            None => here
+                .entry(name.to_string())
+                .or_insert_with(|| toml::Value::Table(toml::Table::new())),
+            Some(i) => element(here, name, i).map_err(|e| format!("--set {assignment}: {e}"))?,
+        };
+        here = entry
             .as_table_mut()
             .ok_or_else(|| format!("--set {assignment}: '{key}' is not a section"))?;
     }
+    let (name, index) = indexed(last).map_err(|e| format!("--set {assignment}: {e}"))?;
+    let slot = match index {
+        Some(i) => element(here, name, i).map_err(|e| format!("--set {assignment}: {e}"))?,
+        None => here
+            .entry(name.to_string())
+            .or_insert_with(|| value.clone()),
+    };
     // `--set process.temperature=310` on a float key means 310.0
-    if let (Some(toml::Value::Float(_)), toml::Value::Integer(i)) = (here.get(*last), &value) {
+    if let (toml::Value::Float(_), toml::Value::Integer(i)) = (&*slot, &value) {
         value = toml::Value::Float(*i as f64);
     }
-    if matches!(here.get(*last), Some(toml::Value::Table(_))) {
+    if matches!(slot, toml::Value::Table(_)) {
         return Err(format!(
             "--set {assignment}: '{path}' is a section, not a value"
         ));
     }
-    here.insert(last.to_string(), value);
+    *slot = value;
     Ok(())
+}
+
+/// A key's name and the place (from 1) it gives in brackets, `ply_angles[2]`, if any.
+fn indexed(key: &str) -> Result<(&str, Option<usize>), String> {
+    let Some((name, rest)) = key.split_once('[') else {
+        return Ok((key, None));
+    };
+    let place = rest
+        .strip_suffix(']')
+        .and_then(|i| i.parse::<usize>().ok())
+        .filter(|&i| i >= 1)
+        .ok_or_else(|| format!("'{key}': a list's element is named by its place from 1, [1]"))?;
+    Ok((name, Some(place)))
+}
+
+/// Element `place` (from 1) of the list `name` of `table`, which must have it.
+fn element<'t>(
+    table: &'t mut toml::Table,
+    name: &str,
+    place: usize,
+) -> Result<&'t mut toml::Value, String> {
+    let list = match table.get_mut(name) {
+        Some(toml::Value::Array(list)) => list,
+        _ => return Err(format!("'{name}' is not a list of the scenario")),
+    };
+    let length = list.len();
+    list.get_mut(place - 1)
+        .ok_or_else(|| format!("'{name}[{place}]': the list has {length} elements"))
 }
 
 /// The scenario `text` as a TOML table with the `key=value` overrides applied.
@@ -1317,5 +1359,30 @@ mod tests {
         assert!(apply_override(&mut table, "process=3").is_err());
         assert!(apply_override(&mut table, "process.temperature").is_err());
         assert!(apply_override(&mut table, "process..x=1").is_err());
+    }
+
+    #[test]
+    fn overrides_reach_an_element_of_a_list() {
+        let text = "[blank]\nply_angles = [0.0, 45.0]\n[[blank.plies]]\nangle = 0.0\n";
+        let mut table: toml::Table = toml::from_str(text).unwrap();
+        apply_override(&mut table, "blank.ply_angles[2]=30").unwrap();
+        let angles = table["blank"]["ply_angles"].as_array().unwrap();
+        assert_eq!(angles[1], toml::Value::Float(30.0));
+        assert_eq!(angles[0], toml::Value::Float(0.0));
+        apply_override(&mut table, "blank.plies[1].angle=15").unwrap();
+        assert_eq!(
+            table["blank"]["plies"][0]["angle"],
+            toml::Value::Float(15.0)
+        );
+        for bad in [
+            "blank.ply_angles[3]=1",
+            "blank.ply_angles[0]=1",
+            "blank.ply_angles[x]=1",
+            "blank.width[1]=1",
+            "blank.plies[2].angle=1",
+        ] {
+            let e = apply_override(&mut table, bad).unwrap_err();
+            assert!(e.contains(bad), "{e}");
+        }
     }
 }
