@@ -112,7 +112,32 @@ fn layup_example_runs_in_reduced_form() {
         assert!(vtu.contains(array), "{array} missing");
     }
     assert!(dir.join("out").join("forming-shear-map.png").exists());
+    per_ply_results(&dir.join("out").join("forming-result.csv"), 4);
     formed_layup_runs_in_calculix(&dir);
+}
+
+/// A layup's `forming-result.csv`: each ply's largest shear, slip and draw-in after the stack's
+/// measures, the stack's largest shear and draw-in the largest of its plies'.
+fn per_ply_results(path: &std::path::Path, plies: usize) {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let row: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let value = |name: &str| -> f64 {
+        let i = header
+            .iter()
+            .position(|h| *h == name)
+            .unwrap_or_else(|| panic!("{name}: {text}"));
+        row[i].parse().unwrap()
+    };
+    let largest = |measure: &str| {
+        (1..=plies)
+            .map(|k| value(&format!("ply{k}_{measure}")))
+            .fold(0.0_f64, f64::max)
+    };
+    assert_eq!(largest("max_shear_deg"), value("max_shear_deg"), "{text}");
+    assert_eq!(largest("draw_in"), value("draw_in"), "{text}");
+    assert!(largest("max_slip") >= 0.0, "{text}");
 }
 
 /// The layup's `formed-blank.inp` (a shell per ply, each ply's sets named `ply N/set`) in

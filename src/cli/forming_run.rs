@@ -9,7 +9,7 @@ use crate::experiment::sheet_test::{FrameOutput, HistorySink, LiveOutput};
 use crate::forming::advice::stop_advice;
 use crate::forming::export::{write_formed_blank, FORMED_INP, FORMED_VTU};
 use crate::forming::preflight::implicit_advice;
-use crate::forming::run::{shear_angles, RESULT_COLUMNS, RESULT_CSV};
+use crate::forming::run::{ply_columns, ply_measures, shear_angles, RESULT_COLUMNS, RESULT_CSV};
 use crate::forming::{run::FormingRun, FormingModel, FormingRecord, Scenario};
 use crate::io::output_folder::ProductFiles;
 use crate::io::plot::{write_map_png, write_png, LinePlot, LineStyle, MapPlot, Series};
@@ -250,13 +250,31 @@ fn write_result_row(
         last.map(|r| r.draw_in),
         last.map(|r| r.energies.balance_error()),
     ];
-    let row: Vec<String> = std::iter::once(format!("\"{status}\""))
+    let mut row: Vec<String> = std::iter::once(format!("\"{status}\""))
         .chain(values.into_iter().map(number))
         .collect();
+    let mut header: Vec<String> = RESULT_COLUMNS.iter().map(|c| c.to_string()).collect();
+    if model.plies.len() > 1 {
+        let plies = result
+            .formed_state()
+            .map(|state| ply_measures(model, state));
+        for k in 0..model.plies.len() {
+            header.extend(ply_columns(k + 1));
+            let ply = plies.as_ref().map(|p| p[k]);
+            row.extend(
+                [
+                    ply.map(|p| p.max_shear),
+                    ply.map(|p| p.max_slip),
+                    ply.map(|p| p.draw_in),
+                ]
+                .map(number),
+            );
+        }
+    }
     let path = dir.join(RESULT_CSV);
     crate::io::product_file::write(
         &path,
-        format!("{}\n{}\n", RESULT_COLUMNS.join(","), row.join(",")).as_bytes(),
+        format!("{}\n{}\n", header.join(","), row.join(",")).as_bytes(),
     )
     .with_context(|| format!("cannot write {}", path.display()))?;
     Ok(path)
@@ -433,7 +451,8 @@ fn print_summary(
     print_checked_table(&rows, &result.checks, &forming.estimate, files);
 }
 
-/// A layup's row per ply: its largest shear angle and how far it slid over its neighbours.
+/// A layup's row per ply: its largest shear angle, how far it slid over its neighbours and
+/// its edge's draw-in.
 fn ply_rows(
     model: &crate::solver::Model,
     state: &crate::solver::State,
@@ -441,21 +460,15 @@ fn ply_rows(
     if model.plies.len() < 2 {
         return Vec::new();
     }
-    let shear = shear_angles(model, state);
     model
         .plies
         .iter()
-        .map(|ply| {
-            let largest = shear[ply.elements.clone()]
-                .iter()
-                .fold(0.0_f64, |m, g| m.max(g.abs()));
-            let slip = state.interply[ply.nodes.clone()]
-                .iter()
-                .flat_map(|c| c.sides.iter().map(|s| s.slip))
-                .fold(0.0_f64, f64::max);
+        .zip(ply_measures(model, state))
+        .map(|(ply, m)| {
             let line = format!(
-                "{}: largest shear {largest:.1}°, slid up to {slip:.2} mm over its neighbours",
-                ply.name
+                "{}: largest shear {:.1}°, slid up to {:.2} mm over its neighbours, draw-in \
+                 {:.2} mm",
+                ply.name, m.max_shear, m.max_slip, m.draw_in
             );
             ("ply", line)
         })

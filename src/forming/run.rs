@@ -385,6 +385,56 @@ fn draw_in(model: &Model, state: &State, edge: &[usize]) -> f64 {
         .fold(0.0, f64::max)
 }
 
+/// What a layup's ply did: its largest shear angle (degrees), how far its nodes slid over its
+/// neighbours at most (mm, `interply_slip`) and its edge's draw-in (mm).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PlyMeasures {
+    pub max_shear: f64,
+    pub max_slip: f64,
+    pub draw_in: f64,
+}
+
+/// Each ply's [`PlyMeasures`] (one for a single ply: the blank's).
+pub fn ply_measures(model: &Model, state: &State) -> Vec<PlyMeasures> {
+    let shear = shear_angles(model, state);
+    let edge = boundary_nodes(model);
+    model
+        .plies
+        .iter()
+        .map(|ply| {
+            let own: Vec<usize> = edge
+                .iter()
+                .copied()
+                .filter(|n| ply.nodes.contains(n))
+                .collect();
+            let max_slip = state
+                .interply
+                .get(ply.nodes.clone())
+                .into_iter()
+                .flatten()
+                .flat_map(|c| c.sides.iter().map(|s| s.slip))
+                .fold(0.0_f64, f64::max);
+            PlyMeasures {
+                max_shear: shear[ply.elements.clone()]
+                    .iter()
+                    .fold(0.0_f64, |m, g| m.max(g.abs())),
+                max_slip,
+                draw_in: draw_in(model, state, &own),
+            }
+        })
+        .collect()
+}
+
+/// The columns a layup's `forming-result.csv` adds per ply `k` (from 1), in
+/// [`PlyMeasures`]'s order.
+pub fn ply_columns(k: usize) -> [String; 3] {
+    [
+        format!("ply{k}_max_shear_deg"),
+        format!("ply{k}_max_slip"),
+        format!("ply{k}_draw_in"),
+    ]
+}
+
 /// Shear angle of every element (degrees, signed).
 pub fn shear_angles(model: &Model, state: &State) -> Vec<f64> {
     model
