@@ -286,3 +286,37 @@ fn a_study_sweeps_a_ply_angle_and_the_interply_friction() {
     assert_eq!(refused.status.code(), Some(2), "{message}");
     assert!(message.contains("ply_angles[9]"), "{message}");
 }
+
+/// examples/double-dome-layup.toml on 10 mm cells over 3 mm of stroke: it reaches the stroke
+/// and sums up each ply, with the per-ply columns of forming-result.csv.
+#[test]
+fn double_dome_layup_example_runs_in_reduced_form() {
+    let dir = scratch_dir("layup", "double-dome");
+    let out = dir.join("out");
+    let output = thermostamp(&[
+        "run",
+        "examples/double-dome-layup.toml",
+        "--set",
+        "blank.element_size=10",
+        "--set",
+        "process.stroke=3",
+        "--set",
+        "output.history_points=3",
+        "--set",
+        "output.frames=0",
+        "--output",
+        out.to_str().unwrap(),
+    ]);
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(
+        output.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    assert!(
+        stdout.contains("stroke reached              3.00 mm"),
+        "{stdout}"
+    );
+    assert!(stdout.contains("ply 2: largest shear"), "{stdout}");
+    per_ply_results(&out.join("forming-result.csv"), 2);
+}
