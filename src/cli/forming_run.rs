@@ -97,20 +97,24 @@ fn forming(args: &Args) -> anyhow::Result<()> {
         write_result_row(&dir, &scenario, &forming, &result)?,
     ];
     if let Some(state) = result.formed_state() {
-        let title = match &result.outcome {
-            Ok(_) => "Formed part: shear angle (top view)".to_string(),
+        let part = match &result.outcome {
+            Ok(_) => "Formed part".to_string(),
             Err(_) => format!(
-                "Part at {:.2} of {} mm, the run stopped: shear angle (top view)",
+                "Part at {:.2} of {} mm, the run stopped",
                 forming.punch.displacement(state.time),
                 scenario.process.stroke
             ),
         };
+        let title = format!("{part}: shear angle (top view)");
         files.push(write_shear_map(
             &dir,
             &forming,
             (state, title),
             scenario.output.locking_angle,
         )?);
+        if forming.model.plies.len() > 1 {
+            files.push(write_slip_map(&dir, &forming, (state, part))?);
+        }
         files.extend(write_formed_blank(&dir, &forming.model, state)?);
     }
     if scenario.output.frames > 0 {
@@ -173,12 +177,13 @@ const CSV: &str = "forming.csv";
 
 const FORCE_PLOT: &str = "forming-punch-force.png";
 const SHEAR_MAP: &str = "forming-shear-map.png";
+const SLIP_MAP: &str = "forming-slip-map.png";
 const SERIES: &str = "forming";
 
 fn products() -> ProductFiles {
     ProductFiles {
         names: [
-            CSV, RESULT_CSV, FORCE_PLOT, SHEAR_MAP, FORMED_INP, FORMED_VTU,
+            CSV, RESULT_CSV, FORCE_PLOT, SHEAR_MAP, SLIP_MAP, FORMED_INP, FORMED_VTU,
         ]
         .map(String::from)
         .to_vec(),
@@ -257,7 +262,7 @@ fn write_result_row(
     if model.plies.len() > 1 {
         let plies = result
             .formed_state()
-            .map(|state| ply_measures(model, state));
+            .map(|state| ply_measures(forming, state));
         for k in 0..model.plies.len() {
             header.extend(ply_columns(k + 1));
             let ply = plies.as_ref().map(|p| p[k]);
@@ -266,6 +271,8 @@ fn write_result_row(
                     ply.map(|p| p.max_shear),
                     ply.map(|p| p.max_slip),
                     ply.map(|p| p.draw_in),
+                    ply.and_then(|p| flange(p.wrinkles.height)),
+                    ply.and_then(|p| flange(p.wrinkles.waviness)),
                 ]
                 .map(number),
             );
@@ -305,6 +312,56 @@ fn write_shear_map(
     (state, title): (&crate::solver::State, String),
     locking_angle: Option<f64>,
 ) -> anyhow::Result<PathBuf> {
+    let values = shear_angles(&forming.model, state)
+        .into_iter()
+        .map(f64::abs)
+        .collect();
+    let label = match locking_angle {
+        Some(l) => format!("|shear angle| (°), locking {l}° marked"),
+        None => "|shear angle| (°)".into(),
+    };
+    let path = dir.join(SHEAR_MAP);
+    let map = ply_map(forming, state, title, (values, label), locking_angle);
+    write_map_png(&path, &map, 900, 700)?;
+    Ok(path)
+}
+
+/// `forming-slip-map.png` of a layup: how far each ply slid over its neighbours, each cell
+/// coloured by the mean of its corners' `interply_slip` (the larger of a node's two sides),
+/// the plies side by side on one scale.
+fn write_slip_map(
+    dir: &Path,
+    forming: &FormingModel,
+    (state, part): (&crate::solver::State, String),
+) -> anyhow::Result<PathBuf> {
+    let slip: Vec<f64> = state
+        .interply
+        .iter()
+        .map(|c| c.sides.iter().map(|s| s.slip).fold(0.0, f64::max))
+        .collect();
+    let values = forming
+        .model
+        .mesh
+        .cells
+        .iter()
+        .map(|c| c.nodes().iter().map(|&n| slip[n]).sum::<f64>() / c.nodes().len() as f64)
+        .collect();
+    let title = format!("{part}: interply slip (top view)");
+    let label = "interply slip (mm)".to_string();
+    let path = dir.join(SLIP_MAP);
+    write_map_png(&path, &ply_map(forming, state, title, (values, label), None), 900, 700)?;
+    Ok(path)
+}
+
+/// A map of the part in `state` from above, a value per cell, the plies of a layup side by
+/// side (the punch's side first), `limit` marked on the scale.
+fn ply_map(
+    forming: &FormingModel,
+    state: &crate::solver::State,
+    title: String,
+    (values, value_label): (Vec<f64>, String),
+    limit: Option<f64>,
+) -> MapPlot {
     let model = &forming.model;
     let x = &state.positions;
     let (lo, hi) = x
@@ -321,14 +378,11 @@ fn write_shear_map(
             format!("x (mm), ply k drawn (k - 1) x {panel:.0} mm to the right"),
         ),
     };
-    let map = MapPlot {
+    MapPlot {
         title,
         axes: (x_axis, "y (mm)".into()),
         equal_scales: true,
-        value_label: match locking_angle {
-            Some(l) => format!("|shear angle| (°), locking {l}° marked"),
-            None => "|shear angle| (°)".into(),
-        },
+        value_label,
         cells: model
             .mesh
             .cells
@@ -339,16 +393,10 @@ fn write_shear_map(
                 t.nodes().iter().map(|&n| (x[n].x + dx, x[n].y)).collect()
             })
             .collect(),
-        values: shear_angles(model, state)
-            .into_iter()
-            .map(f64::abs)
-            .collect(),
-        limit: locking_angle,
+        values,
+        limit,
         outlined: Vec::new(),
-    };
-    let path = dir.join(SHEAR_MAP);
-    write_map_png(&path, &map, 900, 700)?;
-    Ok(path)
+    }
 }
 
 /// A flange measure, or why there is none (tools from files without `tools.flange_radius`).
@@ -446,30 +494,34 @@ fn print_summary(
         ),
     ];
     if let Some(state) = result.formed_state() {
-        rows.extend(ply_rows(&forming.model, state));
+        rows.extend(ply_rows(forming, state));
     }
     print_checked_table(&rows, &result.checks, &forming.estimate, files);
 }
 
-/// A layup's row per ply: its largest shear angle, how far it slid over its neighbours and
-/// its edge's draw-in.
-fn ply_rows(
-    model: &crate::solver::Model,
-    state: &crate::solver::State,
-) -> Vec<(&'static str, String)> {
+/// A layup's row per ply: its largest shear angle, how far it slid over its neighbours, its
+/// edge's draw-in and its flange's lift-off and waviness.
+fn ply_rows(forming: &FormingModel, state: &crate::solver::State) -> Vec<(&'static str, String)> {
+    let model = &forming.model;
     if model.plies.len() < 2 {
         return Vec::new();
     }
     model
         .plies
         .iter()
-        .zip(ply_measures(model, state))
+        .zip(ply_measures(forming, state))
         .map(|(ply, m)| {
-            let line = format!(
+            let mut line = format!(
                 "{}: largest shear {:.1}°, slid up to {:.2} mm over its neighbours, draw-in \
                  {:.2} mm",
                 ply.name, m.max_shear, m.max_slip, m.draw_in
             );
+            if forming.measures_flange() {
+                line += &format!(
+                    ", flange lift-off {:.2} mm, waviness {:.2} mm",
+                    m.wrinkles.height, m.wrinkles.waviness
+                );
+            }
             ("ply", line)
         })
         .collect()

@@ -64,31 +64,31 @@ pub struct Nodes<'a> {
 /// than the contact's reach (`max_penetration`): the penalty no longer holds them, so they went
 /// through the tool. Only the nodes inside the tool's bounding box, grown by three such depths
 /// (a flat holder's box is flat), are searched, a full search each; fixed tools do not move
-/// into the blank.
+/// into the blank. `contact` is each tool's ([`crate::solver::Model::tool_contacts`]).
 pub fn nodes_through_tools(
     tools: &[RigidTool],
     translations: &[Vector3<f64>],
     positions: &[Vector3<f64>],
-    contact: &ContactSettings,
+    contact: &[ContactSettings],
 ) -> usize {
-    let depth = contact.max_penetration;
     let moving = tools
         .iter()
         .zip(translations)
-        .filter(|(tool, _)| !matches!(tool.motion, ToolMotion::Fixed))
-        .map(|(tool, shift)| {
+        .zip(contact)
+        .filter(|((tool, _), _)| !matches!(tool.motion, ToolMotion::Fixed))
+        .map(|((tool, shift), settings)| {
             let (lo, hi) = tool.surface.bounds();
-            let margin = Vector3::repeat(3.0 * depth);
-            (tool, shift, lo - margin, hi + margin)
+            let margin = Vector3::repeat(3.0 * settings.max_penetration);
+            (tool, shift, settings, lo - margin, hi + margin)
         })
         .collect::<Vec<_>>();
     positions
         .par_iter()
         .filter(|x| {
-            moving.iter().any(|(tool, shift, lo, hi)| {
+            moving.iter().any(|(tool, shift, settings, lo, hi)| {
                 let local = *x - *shift;
                 let inside = (0..3).all(|d| local[d] >= lo[d] && local[d] <= hi[d]);
-                inside && tool.gap(&local, contact.offset) < -depth
+                inside && tool.gap(&local, settings.offset) < -settings.max_penetration
             })
         })
         .count()
@@ -103,8 +103,8 @@ struct NodeMotion {
 }
 
 /// Contact forces on every node for the step `dt` about to be taken, from the tools placed at
-/// `translations` and moving at `tool_velocities`; updates `contacts` (one per node) and
-/// returns the load on each tool. The nodes go in parallel in chunks of [`NODE_CHUNK`], each
+/// `translations` and moving at `tool_velocities`, `settings` each tool's; updates `contacts`
+/// (one per node) and returns the load on each tool. The nodes go in parallel in chunks of [`NODE_CHUNK`], each
 /// summed in node order and the chunks' loads added in order: the loads drive the holder and
 /// give the punch force, so their rounding must not depend on the thread count.
 pub fn evaluate(
@@ -112,7 +112,7 @@ pub fn evaluate(
     (translations, tool_velocities): (&[Vector3<f64>], &[Vector3<f64>]),
     nodes: Nodes,
     dt: f64,
-    settings: &ContactSettings,
+    settings: &[ContactSettings],
     contacts: &mut [NodeContact],
 ) -> Vec<ToolLoad> {
     let chunks: Vec<Vec<ToolLoad>> = contacts
@@ -163,7 +163,7 @@ fn node_contact(
     (translations, tool_velocities): (&[Vector3<f64>], &[Vector3<f64>]),
     node: &NodeMotion,
     dt: f64,
-    settings: &ContactSettings,
+    settings: &[ContactSettings],
     contact: &mut NodeContact,
     loads: &mut [ToolLoad],
 ) {
@@ -173,12 +173,12 @@ fn node_contact(
     contact.near.resize(tools.len(), NearTriangles::default());
     for (k, tool) in tools.iter().enumerate() {
         let moving = (translations[k], tool_velocities[k]);
-        let f = node_tool_force(tool, moving, node, dt, settings, contact, k);
+        let f = node_tool_force(tool, moving, node, dt, &settings[k], contact, k);
         contact.force += f;
         if contact.normal_force[k] > 0.0 {
             loads[k].force -= f;
             loads[k].normal_force += contact.normal_force[k];
-            loads[k].stiffness += penalty_stiffness(node.mass, dt, settings);
+            loads[k].stiffness += penalty_stiffness(node.mass, dt, &settings[k]);
             loads[k].nodes_in_contact += 1;
         }
     }

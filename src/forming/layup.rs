@@ -1,88 +1,102 @@
 //! The blank of a layup (`blank.ply_angles` or `[[blank.plies]]`, docs/forming.md "Layups"):
 //! every ply the blank's outline, cut from its own card at its own angle, stacked from the
-//! punch's side upwards with their mid-surfaces one ply apart, each held as the scenario's
-//! `[[boundary]]` sets say, neighbours joined by `blank.interply`'s friction.
+//! punch's side upwards each on the one below it, each held as the scenario's `[[boundary]]`
+//! sets say, neighbours joined by the friction of `blank.interply` or `[[blank.interfaces]]`.
 
-use super::scenario::{Layup, Scenario};
+use super::scenario::{Layup, PlySpec, Scenario};
 use crate::contact::ply_contact::PlyInterface;
 use crate::element::BendingRigidity;
 use crate::material::MaterialCard;
 use crate::mesh::orientation::reference_warp;
+use crate::mesh::outline::Outline;
 use crate::mesh::Mesh;
 use crate::solver::model::PlySheet;
 use crate::solver::{Constraint, Model};
 
-/// The layup's cards, each checked at the run's temperature, all of one thickness (the tools
-/// and the contact offsets are placed for plies of one thickness).
+/// The layup's cards, each checked at the run's temperature.
 pub fn ply_cards(s: &Scenario, layup: &Layup) -> Result<Vec<MaterialCard>, String> {
-    let mut cards: Vec<MaterialCard> = Vec::with_capacity(layup.plies.len());
-    for (i, ply) in layup.plies.iter().enumerate() {
-        let key = format!("blank.plies[{}].card", i + 1);
-        let card = MaterialCard::load(&ply.card).map_err(|e| format!("{key}: {e}"))?;
-        card.check_temperature("process.temperature", s.process.temperature)
-            .map_err(|e| format!("{}: {e} ({})", s.origin, ply.card.display()))?;
-        if let Some(first) = cards.first() {
-            let (t, t0) = (
-                card.laminate.reference_thickness(),
-                first.laminate.reference_thickness(),
-            );
-            if (t / t0 - 1.0).abs() > 1e-9 {
-                return Err(format!(
-                    "{}: {key} ({}) is {t} mm thick, the first ply {t0} mm: the plies of a \
-                     layup must be of one thickness",
-                    s.origin,
-                    ply.card.display()
-                ));
-            }
-        }
-        cards.push(card);
-    }
-    Ok(cards)
+    layup
+        .plies
+        .iter()
+        .enumerate()
+        .map(|(i, ply)| {
+            let key = format!("blank.plies[{}].card", i + 1);
+            let card = MaterialCard::load(&ply.card).map_err(|e| format!("{key}: {e}"))?;
+            card.check_temperature("process.temperature", s.process.temperature)
+                .map_err(|e| format!("{}: {e} ({})", s.origin, ply.card.display()))?;
+            Ok(card)
+        })
+        .collect()
 }
 
-/// The model of the layup on the blank's `mesh` (one ply's outline, its mid-surface at the
-/// stack's middle), with `constraints` on that mesh's nodes repeated on every ply.
+/// Each ply's reference thickness (mm), from the punch's side.
+pub fn ply_thicknesses(cards: &[MaterialCard]) -> Vec<f64> {
+    cards
+        .iter()
+        .map(|c| c.laminate.reference_thickness())
+        .collect()
+}
+
+/// Where each ply's mid-surface lies above the stack's middle (mm): the plies of
+/// `thicknesses` stacked from below, each on the one under it.
+pub fn ply_lifts(thicknesses: &[f64]) -> Vec<f64> {
+    let total: f64 = thicknesses.iter().sum();
+    let mut below = 0.0;
+    thicknesses
+        .iter()
+        .map(|t| {
+            let lift = below + 0.5 * t - 0.5 * total;
+            below += t;
+            lift
+        })
+        .collect()
+}
+
+/// The model of the layup on each ply's mesh (`meshes`, from the punch's side, each with its
+/// mid-surface in z = 0, lifted here to its place in the stack), each ply with its own
+/// `constraints` on its mesh's nodes.
 pub fn layup_model(
     s: &Scenario,
     layup: &Layup,
     cards: &[MaterialCard],
-    mesh: &Mesh,
-    constraints: &[Constraint],
+    meshes: Vec<Mesh>,
+    constraints: Vec<Vec<Constraint>>,
 ) -> Result<Model, String> {
-    check_upward(s, mesh)?;
+    for (ply, mesh) in layup.plies.iter().zip(&meshes) {
+        check_upward(s, ply, mesh)?;
+    }
+    check_plies_between(s, layup, &meshes)?;
     let p = &s.process;
-    let t = cards[0].laminate.reference_thickness();
     let n = layup.plies.len();
-    let sheets = layup
+    let lifts = ply_lifts(&ply_thicknesses(cards));
+    let mut first_node = 0;
+    let mut held = Vec::new();
+    let mut sheets = Vec::with_capacity(n);
+    for (((ply, card), (mut mesh, own)), lift) in layup
         .plies
         .iter()
         .zip(cards)
-        .enumerate()
-        .map(|(k, (ply, card))| {
-            let mut mesh = mesh.clone();
-            let lift = (k as f64 + 0.5 - 0.5 * n as f64) * t;
-            for x in &mut mesh.nodes {
-                x.z += lift;
-            }
-            PlySheet {
-                name: ply.name.clone(),
-                mesh,
-                laminate: card.laminate.time_scaled(p.time_scaling),
-                density: card.density,
-                warp_direction: reference_warp(s.blank.reference_direction, ply.angle),
-            }
-        })
-        .collect();
-    let per_ply = mesh.nodes.len();
-    let constraints = (0..n)
-        .flat_map(|k| {
-            constraints.iter().map(move |c| Constraint {
-                name: format!("{}: {}", layup.plies[k].name, c.name),
-                nodes: c.nodes.iter().map(|i| i + k * per_ply).collect(),
-                motion: c.motion.clone(),
-            })
-        })
-        .collect();
+        .zip(meshes.into_iter().zip(constraints))
+        .zip(lifts)
+    {
+        for x in &mut mesh.nodes {
+            x.z += lift;
+        }
+        held.extend(own.into_iter().map(|c| Constraint {
+            name: format!("{}: {}", ply.name, c.name),
+            nodes: c.nodes.iter().map(|i| i + first_node).collect(),
+            motion: c.motion,
+        }));
+        first_node += mesh.nodes.len();
+        sheets.push(PlySheet {
+            name: ply.name.clone(),
+            mesh,
+            laminate: card.laminate.time_scaled(p.time_scaling),
+            density: card.density,
+            warp_direction: reference_warp(s.blank.reference_direction, ply.angle),
+        });
+    }
+    let constraints = held;
     let mut model = Model::layup(sheets, p.temperature, constraints).map_err(|e| e.to_string())?;
     if cards.iter().any(|c| c.bending.is_some()) {
         let none = BendingRigidity {
@@ -99,12 +113,11 @@ pub fn layup_model(
             .map_err(|e| e.to_string())?;
     }
     // the film sees the physical slip speed, as the matrix's eta1 does (docs/model.md §6)
-    let friction = layup.interply.time_scaled(p.time_scaling);
     let interfaces = (1..n)
         .map(|k| PlyInterface {
             lower: k - 1,
             upper: k,
-            friction,
+            friction: layup.interfaces[k - 1].time_scaled(p.time_scaling),
         })
         .collect();
     model.with_interfaces(interfaces).map_err(|e| e.to_string())
@@ -112,17 +125,56 @@ pub fn layup_model(
 
 /// The plies are stacked along +z, and the contact between them takes the upper ply on the
 /// side the cells' normals point to: a mesh whose cells run clockwise seen from +z is refused.
-fn check_upward(s: &Scenario, mesh: &Mesh) -> Result<(), String> {
+fn check_upward(s: &Scenario, ply: &PlySpec, mesh: &Mesh) -> Result<(), String> {
     let up: f64 = (0..mesh.cells.len())
         .map(|c| mesh.cells[c].area_vector(&mesh.nodes).z)
         .sum();
     if up > 0.0 {
         return Ok(());
     }
+    let whose = match &ply.shape {
+        Some(_) => format!("ply \"{}\"'s", ply.name),
+        None => "the blank's".into(),
+    };
     Err(format!(
-        "{}: the blank's cells run clockwise seen from +z (their normals point down): the \
-         plies of a layup are stacked upwards from the punch and need the cells \
-         counter-clockwise; reverse the cells' node order in the mesh file",
+        "{}: {whose} cells run clockwise seen from +z (their normals point down): the plies of \
+         a layup are stacked upwards from the punch and need the cells counter-clockwise; \
+         reverse the cells' node order in the mesh file",
         s.origin
     ))
+}
+
+/// Each ply touches the plies next to it in the stack, and no other (docs/forming.md,
+/// "Layups"): where a ply lies over (or under) one that is not its neighbour, the plies between
+/// them must lie there too, or the two would pass through each other unseen. Checked at every
+/// node of every ply, seen along z, where a ply has an outline of its own.
+fn check_plies_between(s: &Scenario, layup: &Layup, meshes: &[Mesh]) -> Result<(), String> {
+    if layup.plies.iter().all(|p| p.shape.is_none()) {
+        return Ok(());
+    }
+    let outlines: Vec<Outline> = meshes.iter().map(Outline::of).collect();
+    for (j, mesh) in meshes.iter().enumerate() {
+        for x in &mesh.nodes {
+            let over: Vec<bool> = outlines.iter().map(|o| o.contains(&x.xy())).collect();
+            let gap = (0..meshes.len())
+                .filter(|&k| over[k] && k.abs_diff(j) > 1)
+                .find_map(|k| (k.min(j) + 1..k.max(j)).find(|&m| !over[m]).map(|m| (k, m)));
+            if let Some((k, missing)) = gap {
+                let name = |i: usize| format!("\"{}\" (ply {})", layup.plies[i].name, i + 1);
+                return Err(format!(
+                    "{}: ply {} and ply {} both lie at ({:.1}, {:.1}) mm, and ply {} between them \
+                     does not: plies touch only their neighbours in the stack, so two plies \
+                     apart must have every ply between them wherever they overlap; give the \
+                     plies outlines that nest (docs/forming.md, \"Layups\")",
+                    s.origin,
+                    name(j.min(k)),
+                    name(j.max(k)),
+                    x.x,
+                    x.y,
+                    name(missing)
+                ));
+            }
+        }
+    }
+    Ok(())
 }

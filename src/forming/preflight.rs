@@ -71,6 +71,27 @@ impl BlankSize {
         })
     }
 
+    /// The plies of `meshes` together: their cells and nodes summed, the smallest altitude
+    /// and the largest reach.
+    pub fn of_meshes(meshes: &[Mesh]) -> Self {
+        meshes.iter().map(Self::of_mesh).fold(
+            Self {
+                elements: 0.0,
+                quads: 0.0,
+                nodes: 0.0,
+                altitude: f64::INFINITY,
+                reach: 0.0,
+            },
+            |all, m| Self {
+                elements: all.elements + m.elements,
+                quads: all.quads + m.quads,
+                nodes: all.nodes + m.nodes,
+                altitude: all.altitude.min(m.altitude),
+                reach: all.reach.max(m.reach),
+            },
+        )
+    }
+
     /// A mesh's, once read from its file.
     pub fn of_mesh(mesh: &Mesh) -> Self {
         let quads = mesh.cells.iter().filter(|c| c.is_quad()).count();

@@ -309,22 +309,29 @@ impl BandTrend {
 /// The [`Wrinkles`] of the flange in `state` (of a layup, of the ply against the die);
 /// `nodal_area` from [`Model::nodal_areas`].
 pub fn flange_wrinkles(f: &FormingModel, state: &State, nodal_area: &[f64]) -> Wrinkles {
+    ply_wrinkles(f, state, nodal_area, f.model.plies.len() - 1)
+}
+
+/// The [`Wrinkles`] of ply `ply`'s flange in `state` (index into [`Model::plies`], from the
+/// punch's side): its gaps measured from where it lies flat on the die under the plies above
+/// it, and lifted where that gap exceeds half its own thickness.
+pub fn ply_wrinkles(f: &FormingModel, state: &State, nodal_area: &[f64], ply: usize) -> Wrinkles {
     let die = &f.model.tools[f.die_tool];
-    let offset = f.model.contact.offset;
-    let translation = state.tool_translations[f.die_tool];
-    // of a layup, the ply against the die (the last from the punch's side)
-    let die_ply = f.model.plies.last().map_or(0..0, |p| p.nodes.clone());
-    let nodes: Vec<FlangeNode> = state
-        .positions
+    let plies = &f.model.plies;
+    let half = 0.5 * plies[ply].laminate.reference_thickness();
+    let above: f64 = plies[ply + 1..]
         .iter()
-        .zip(nodal_area)
-        .enumerate()
-        .filter(|(n, (x, _))| die_ply.contains(n) && f.in_flange(x))
-        .map(|(_, node)| node)
-        .map(|(x, &area)| FlangeNode {
-            distance: f.distance_from_ridge(x),
-            band: f.flange_band(x),
-            gap: die.gap(&(x - translation), offset).max(0.0),
+        .map(|p| p.laminate.reference_thickness())
+        .sum();
+    let translation = state.tool_translations[f.die_tool];
+    let own = plies[ply].nodes.clone();
+    let nodes: Vec<FlangeNode> = own
+        .map(|n| (state.positions[n], nodal_area[n]))
+        .filter(|(x, _)| f.in_flange(x))
+        .map(|(x, area)| FlangeNode {
+            distance: f.distance_from_ridge(&x),
+            band: f.flange_band(&x),
+            gap: die.gap(&(x - translation), half + above).max(0.0),
             area,
         })
         .collect();
@@ -343,7 +350,7 @@ pub fn flange_wrinkles(f: &FormingModel, state: &State, nodal_area: &[f64]) -> W
         lowest[n.band] = lowest[n.band].min(r);
         highest[n.band] = highest[n.band].max(r);
     }
-    let above_threshold = |gap: f64, area: f64| if gap > offset { area } else { 0.0 };
+    let above_threshold = |gap: f64, area: f64| if gap > half { area } else { 0.0 };
     nodes
         .iter()
         .zip(&residuals)
@@ -386,22 +393,27 @@ fn draw_in(model: &Model, state: &State, edge: &[usize]) -> f64 {
 }
 
 /// What a layup's ply did: its largest shear angle (degrees), how far its nodes slid over its
-/// neighbours at most (mm, `interply_slip`) and its edge's draw-in (mm).
+/// neighbours at most (mm, `interply_slip`), its edge's draw-in (mm) and its flange's
+/// [`Wrinkles`] ([`ply_wrinkles`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PlyMeasures {
     pub max_shear: f64,
     pub max_slip: f64,
     pub draw_in: f64,
+    pub wrinkles: Wrinkles,
 }
 
 /// Each ply's [`PlyMeasures`] (one for a single ply: the blank's).
-pub fn ply_measures(model: &Model, state: &State) -> Vec<PlyMeasures> {
+pub fn ply_measures(f: &FormingModel, state: &State) -> Vec<PlyMeasures> {
+    let model = &f.model;
     let shear = shear_angles(model, state);
     let edge = boundary_nodes(model);
+    let areas = model.nodal_areas();
     model
         .plies
         .iter()
-        .map(|ply| {
+        .enumerate()
+        .map(|(k, ply)| {
             let own: Vec<usize> = edge
                 .iter()
                 .copied()
@@ -420,18 +432,21 @@ pub fn ply_measures(model: &Model, state: &State) -> Vec<PlyMeasures> {
                     .fold(0.0_f64, |m, g| m.max(g.abs())),
                 max_slip,
                 draw_in: draw_in(model, state, &own),
+                wrinkles: ply_wrinkles(f, state, &areas, k),
             }
         })
         .collect()
 }
 
 /// The columns a layup's `forming-result.csv` adds per ply `k` (from 1), in
-/// [`PlyMeasures`]'s order.
-pub fn ply_columns(k: usize) -> [String; 3] {
+/// [`PlyMeasures`]'s order, its flange's lift-off and waviness last.
+pub fn ply_columns(k: usize) -> [String; 5] {
     [
         format!("ply{k}_max_shear_deg"),
         format!("ply{k}_max_slip"),
         format!("ply{k}_draw_in"),
+        format!("ply{k}_lift_off"),
+        format!("ply{k}_waviness"),
     ]
 }
 

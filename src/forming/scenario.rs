@@ -49,10 +49,11 @@ pub struct Blank {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Layup {
     pub plies: Vec<PlySpec>,
-    /// `blank.interply`: the friction between every two neighbouring plies, at
-    /// `process.temperature` and the physical speeds (the solver's time scaling is applied
-    /// when the model is built).
-    pub interply: FilmFriction,
+    /// The friction between each two neighbouring plies, from the punch's side (one fewer than
+    /// the plies): `blank.interply`'s, or a `[[blank.interfaces]]` table's where one names the
+    /// pair; at `process.temperature` and the physical speeds (the solver's time scaling is
+    /// applied when the model is built).
+    pub interfaces: Vec<FilmFriction>,
     /// Whether the plies came as `blank.ply_angles` (the keys named in messages).
     pub from_angles: bool,
 }
@@ -65,6 +66,9 @@ pub struct PlySpec {
     pub card: PathBuf,
     /// Its warp angle (degrees) from the blank's reference direction.
     pub angle: f64,
+    /// Its own outline (a rectangle of the blank's element size and pattern, or a mesh file);
+    /// `None`: the blank's.
+    pub shape: Option<BlankShape>,
 }
 
 /// `[[blank.plies]]` as written.
@@ -74,14 +78,66 @@ struct PlyTable {
     angle: f64,
     card: Option<PathBuf>,
     name: Option<String>,
+    width: Option<f64>,
+    length: Option<f64>,
+    mesh: Option<PathBuf>,
+    element_set: Option<String>,
 }
 
-/// `[blank.interply]` as written: Eqs. (F1)–(F3) of docs/model.md. `friction`,
+impl PlyTable {
+    /// The ply's own outline, if it has one (`key` its table's, `blank` the blank's shape),
+    /// paths resolved against `folder`.
+    fn shape(
+        &self,
+        key: &str,
+        blank: &BlankShape,
+        folder: &Path,
+    ) -> Result<Option<BlankShape>, String> {
+        match (&self.mesh, self.width, self.length) {
+            (Some(mesh), None, None) => Ok(Some(BlankShape::File {
+                mesh: folder.join(mesh),
+                element_set: self.element_set.clone(),
+            })),
+            (Some(_), _, _) => Err(format!(
+                "{key}.mesh gives the ply's outline, and so do its width and length: keep one"
+            )),
+            (None, ..) if self.element_set.is_some() => Err(format!(
+                "{key}.element_set names a set of {key}.mesh, which is not given"
+            )),
+            (None, None, None) => Ok(None),
+            (None, Some(width), Some(length)) => match blank {
+                BlankShape::Rectangle {
+                    element_size,
+                    pattern,
+                    ..
+                } => Ok(Some(BlankShape::Rectangle {
+                    width,
+                    length,
+                    element_size: *element_size,
+                    pattern: *pattern,
+                })),
+                BlankShape::File { .. } => Err(format!(
+                    "{key}.width: a ply's own rectangle is meshed at blank.element_size, and the \
+                     blank is read from blank.mesh: give the ply a mesh file ({key}.mesh) instead"
+                )),
+            },
+            (None, ..) => Err(format!(
+                "{key}.width and length go together: the ply's own rectangle, centred on the \
+                 punch's axis"
+            )),
+        }
+    }
+}
+
+/// `[blank.interply]` or a `[[blank.interfaces]]` table as written: Eqs. (F1)–(F3) of
+/// docs/model.md. `friction`,
 /// `film_viscosity`, `film_consistency` and `yield_stress` are numbers or tables of
 /// `[temperature °C, value]` pairs ([`ByTemperature`]), taken at `process.temperature`.
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct InterplyTable {
+    /// `[[blank.interfaces]]` only: the two neighbouring plies the table is between.
+    between: Option<[PlyRef; 2]>,
     friction: ByTemperature,
     /// `"newtonian"` (the default), `"power-law"` or `"cross"`.
     film_law: Option<FilmLaw>,
@@ -97,6 +153,34 @@ struct InterplyTable {
     film_transition_stress: Option<f64>,
     /// The film's yield stress (MPa).
     yield_stress: Option<ByTemperature>,
+}
+
+/// A ply named in `[[blank.interfaces]]`: its place from the punch's side (from 1) or its name.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(untagged)]
+enum PlyRef {
+    Place(i64),
+    Name(String),
+}
+
+impl PlyRef {
+    /// The index of the ply among `plies`, or why there is none.
+    fn index(&self, plies: &[PlySpec]) -> Result<usize, String> {
+        match self {
+            Self::Place(k) if *k >= 1 && (*k as usize) <= plies.len() => Ok(*k as usize - 1),
+            Self::Place(k) => Err(format!(
+                "names ply {k}; the layup has plies 1 to {}",
+                plies.len()
+            )),
+            Self::Name(name) => plies.iter().position(|p| &p.name == name).ok_or_else(|| {
+                let names: Vec<String> = plies.iter().map(|p| format!("\"{}\"", p.name)).collect();
+                format!(
+                    "names no ply of the layup: \"{name}\" is not one of {}",
+                    names.join(", ")
+                )
+            }),
+        }
+    }
 }
 
 /// How the film's viscosity depends on its shear rate (docs/model.md Eqs. (F1)–(F3)).
@@ -192,15 +276,15 @@ impl ByTemperature {
 impl InterplyTable {
     /// The friction at `temperature` (°C), every value within its range, the film's keys
     /// those of its law.
-    fn friction(&self, temperature: f64) -> Result<FilmFriction, String> {
-        let key = |name: &str| format!("blank.interply.{name}");
+    fn friction(&self, table: &str, temperature: f64) -> Result<FilmFriction, String> {
+        let key = |name: &str| format!("{table}.{name}");
         let mu = self.friction.at(&key("friction"), FRICTION, temperature)?;
         let shear_cap = match &self.yield_stress {
             Some(cap) => cap.at(&key("yield_stress"), FILM_YIELD, temperature)?,
             None => f64::INFINITY,
         };
         let law = self.film_law.unwrap_or_default();
-        self.check_film_keys(law)?;
+        self.check_film_keys(table, law)?;
         // Pa·s (and Pa·s^n) to the MPa·s of the model's units
         const PA: f64 = 1e-6;
         // check_film_keys has asked a shear-thinning film for its thickness
@@ -210,7 +294,7 @@ impl InterplyTable {
         FILM_THICKNESS.check(&key("film_thickness"), h)?;
         Ok(match law {
             FilmLaw::Newtonian => {
-                let eta = self.viscosity(temperature)?;
+                let eta = self.viscosity(table, temperature)?;
                 FilmFriction::newtonian(mu, PA * eta / h, shear_cap)
             }
             FilmLaw::PowerLaw => {
@@ -220,34 +304,38 @@ impl InterplyTable {
                 };
                 let cutoff = self.film_cutoff_rate.unwrap_or(DEFAULT_CUTOFF_RATE);
                 FILM_CUTOFF_RATE.check(&key("film_cutoff_rate"), cutoff)?;
-                let law = (PA * consistency, self.index()?, cutoff);
+                let law = (PA * consistency, self.index(table)?, cutoff);
                 FilmFriction::power_law(mu, law, h, shear_cap)
             }
             FilmLaw::Cross => {
-                let eta0 = self.viscosity(temperature)?;
+                let eta0 = self.viscosity(table, temperature)?;
                 let tau_star = self.film_transition_stress.unwrap_or(f64::NAN);
                 FILM_TRANSITION_STRESS.check(&key("film_transition_stress"), tau_star)?;
-                FilmFriction::cross(mu, (PA * eta0, self.index()?, tau_star), h, shear_cap)
+                FilmFriction::cross(mu, (PA * eta0, self.index(table)?, tau_star), h, shear_cap)
             }
         })
     }
 
     /// `film_index`, `n`.
-    fn index(&self) -> Result<f64, String> {
+    fn index(&self, table: &str) -> Result<f64, String> {
         let n = self.film_index.unwrap_or(f64::NAN);
-        FILM_INDEX.check("blank.interply.film_index", n)?;
+        FILM_INDEX.check(&format!("{table}.film_index"), n)?;
         Ok(n)
     }
 
     /// `film_viscosity` at `temperature` (Pa·s).
-    fn viscosity(&self, temperature: f64) -> Result<f64, String> {
+    fn viscosity(&self, table: &str, temperature: f64) -> Result<f64, String> {
         let eta = self.film_viscosity.as_ref().ok_or("no film_viscosity")?;
-        eta.at("blank.interply.film_viscosity", FILM_VISCOSITY, temperature)
+        eta.at(
+            &format!("{table}.film_viscosity"),
+            FILM_VISCOSITY,
+            temperature,
+        )
     }
 
     /// The film keys given are those of `law`: all it needs (for a Newtonian film, both of its
     /// keys or neither), none of another law's.
-    fn check_film_keys(&self, law: FilmLaw) -> Result<(), String> {
+    fn check_film_keys(&self, table: &str, law: FilmLaw) -> Result<(), String> {
         let given = [
             ("film_viscosity", self.film_viscosity.is_some()),
             ("film_thickness", self.film_thickness.is_some()),
@@ -267,7 +355,7 @@ impl InterplyTable {
         for (name, _) in given.iter().filter(|(_, g)| *g) {
             if !needed.contains(name) && !optional.contains(name) {
                 return Err(format!(
-                    "blank.interply.{name} is not a key of {law_named}: {} (docs/forming.md, \
+                    "{table}.{name} is not a key of {law_named}: {} (docs/forming.md, \
                      \"Layups\")",
                     owner_of(name)
                 ));
@@ -275,11 +363,10 @@ impl InterplyTable {
         }
         if law == FilmLaw::Newtonian {
             if self.film_viscosity.is_some() != self.film_thickness.is_some() {
-                return Err(
-                    "blank.interply.film_viscosity and film_thickness go together: give both, \
-                     or neither for Coulomb friction alone"
-                        .into(),
-                );
+                return Err(format!(
+                    "{table}.film_viscosity and film_thickness go together: give both, or \
+                     neither for Coulomb friction alone"
+                ));
             }
             return Ok(());
         }
@@ -288,7 +375,7 @@ impl InterplyTable {
             .find(|n| !given.iter().any(|(g, set)| g == *n && *set))
         {
             Some(name) => Err(format!(
-                "blank.interply.{name} is needed by {law_named} (docs/forming.md, \"Layups\")"
+                "{table}.{name} is needed by {law_named} (docs/forming.md, \"Layups\")"
             )),
             None => Ok(()),
         }
@@ -344,6 +431,7 @@ struct BlankTable {
     ply_angles: Option<Vec<f64>>,
     plies: Option<Vec<PlyTable>>,
     interply: Option<InterplyTable>,
+    interfaces: Option<Vec<InterplyTable>>,
 }
 
 impl BlankTable {
@@ -351,8 +439,7 @@ impl BlankTable {
     /// layup's friction taken at the run's `temperature` (°C).
     fn resolve(self, folder: &Path, temperature: f64) -> Result<Blank, String> {
         let card = folder.join(&self.card);
-        let layup = self.layup(&card, folder, temperature)?;
-        let shape = match self.mesh {
+        let shape = match &self.mesh {
             Some(mesh) => {
                 let rectangle_keys = [
                     ("width", self.width.is_some()),
@@ -368,7 +455,7 @@ impl BlankTable {
                 }
                 BlankShape::File {
                     mesh: folder.join(mesh),
-                    element_set: self.element_set,
+                    element_set: self.element_set.clone(),
                 }
             }
             None => {
@@ -393,6 +480,7 @@ impl BlankTable {
                 }
             }
         };
+        let layup = self.layup((&card, &shape), folder, temperature)?;
         Ok(Blank {
             card,
             shape,
@@ -404,7 +492,12 @@ impl BlankTable {
 
     /// The layup of `blank.ply_angles` or `[[blank.plies]]` (never both), with
     /// `blank.interply` at `temperature` (°C); `None` for one ply.
-    fn layup(&self, card: &Path, folder: &Path, temperature: f64) -> Result<Option<Layup>, String> {
+    fn layup(
+        &self,
+        (card, shape): (&Path, &BlankShape),
+        folder: &Path,
+        temperature: f64,
+    ) -> Result<Option<Layup>, String> {
         let plies: Vec<PlySpec> = match (&self.ply_angles, &self.plies) {
             (Some(_), Some(_)) => {
                 return Err(
@@ -415,12 +508,15 @@ impl BlankTable {
                 )
             }
             (None, None) => {
-                if self.interply.is_some() {
-                    return Err(
-                        "blank.interply is the friction between plies, and the blank \
-                         has one ply: give blank.ply_angles or [[blank.plies]], or remove it"
-                            .into(),
-                    );
+                let given = [
+                    ("blank.interply", self.interply.is_some()),
+                    ("[[blank.interfaces]]", self.interfaces.is_some()),
+                ];
+                if let Some((key, _)) = given.iter().find(|(_, g)| *g) {
+                    return Err(format!(
+                        "{key} is the friction between plies, and the blank has one ply: give \
+                         blank.ply_angles or [[blank.plies]], or remove it"
+                    ));
                 }
                 return Ok(None);
             }
@@ -431,20 +527,24 @@ impl BlankTable {
                     name: format!("ply {}", i + 1),
                     card: card.to_path_buf(),
                     angle,
+                    shape: None,
                 })
                 .collect(),
             (None, Some(tables)) => tables
                 .iter()
                 .enumerate()
-                .map(|(i, t)| PlySpec {
-                    name: t.name.clone().unwrap_or_else(|| format!("ply {}", i + 1)),
-                    card: t
-                        .card
-                        .as_ref()
-                        .map_or(card.to_path_buf(), |c| folder.join(c)),
-                    angle: t.angle,
+                .map(|(i, t)| {
+                    Ok(PlySpec {
+                        name: t.name.clone().unwrap_or_else(|| format!("ply {}", i + 1)),
+                        card: t
+                            .card
+                            .as_ref()
+                            .map_or(card.to_path_buf(), |c| folder.join(c)),
+                        angle: t.angle,
+                        shape: t.shape(&format!("blank.plies[{}]", i + 1), shape, folder)?,
+                    })
                 })
-                .collect(),
+                .collect::<Result<_, String>>()?,
         };
         let key = if self.ply_angles.is_some() {
             "blank.ply_angles"
@@ -469,17 +569,82 @@ impl BlankTable {
                 return Err(format!("blank.plies: two plies are named \"{}\"", a.name));
             }
         }
-        let interply = self.interply.as_ref().ok_or(
-            "a layup needs blank.interply.friction, the Coulomb friction between its plies \
-             (docs/model.md, \"Friction through the molten film\")",
-        )?;
         // a table is read at the run's temperature: that must be a temperature first
         TEMPERATURE.check("process.temperature", temperature)?;
+        let interfaces = self.interfaces(&plies, temperature)?;
         Ok(Some(Layup {
             plies,
-            interply: interply.friction(temperature)?,
+            interfaces,
             from_angles: self.ply_angles.is_some(),
         }))
+    }
+
+    /// The friction between each two neighbouring `plies` at `temperature` (°C):
+    /// `[[blank.interfaces]]`'s where a table names the pair, `blank.interply`'s elsewhere.
+    fn interfaces(&self, plies: &[PlySpec], temperature: f64) -> Result<Vec<FilmFriction>, String> {
+        let mut own: Vec<Option<FilmFriction>> = vec![None; plies.len() - 1];
+        for (i, table) in self.interfaces.iter().flatten().enumerate() {
+            let key = format!("blank.interfaces[{}]", i + 1);
+            let lower = table.neighbours(&key, plies)?;
+            if own[lower].is_some() {
+                return Err(format!(
+                    "{key}.between: plies {} and {} have a table before it: give each pair one",
+                    lower + 1,
+                    lower + 2
+                ));
+            }
+            own[lower] = Some(table.friction(&key, temperature)?);
+        }
+        if let Some(table) = &self.interply {
+            if table.between.is_some() {
+                return Err(
+                    "blank.interply.between is not a key: blank.interply is the \
+                            friction between every two plies that no [[blank.interfaces]] \
+                            table names"
+                        .into(),
+                );
+            }
+        }
+        let default = match (&self.interply, own.iter().all(Option::is_some)) {
+            (Some(table), _) => Some(table.friction("blank.interply", temperature)?),
+            (None, true) => None,
+            (None, false) => {
+                return Err(
+                    "a layup needs blank.interply.friction, the Coulomb friction \
+                            between its plies (docs/model.md, \"Friction through the molten \
+                            film\"), unless a [[blank.interfaces]] table gives every pair's"
+                        .into(),
+                )
+            }
+        };
+        Ok(own
+            .into_iter()
+            .map(|f| f.or(default).expect("a default where a pair has no table"))
+            .collect())
+    }
+}
+
+impl InterplyTable {
+    /// The index of the lower of the two neighbouring plies `between` names, in
+    /// `[[blank.interfaces]]` table `key`.
+    fn neighbours(&self, key: &str, plies: &[PlySpec]) -> Result<usize, String> {
+        let Some([a, b]) = &self.between else {
+            return Err(format!(
+                "{key}.between is needed: the two neighbouring plies the table is between, by \
+                 place from the punch's side (between = [1, 2]) or by name"
+            ));
+        };
+        let [a, b] = [a, b].map(|p| p.index(plies).map_err(|e| format!("{key}.between {e}")));
+        let (a, b) = (a?, b?);
+        if a.abs_diff(b) != 1 {
+            return Err(format!(
+                "{key}.between gives plies {} and {}: an interface is between two neighbouring \
+                 plies (places one apart)",
+                a + 1,
+                b + 1
+            ));
+        }
+        Ok(a.min(b))
     }
 }
 
@@ -853,6 +1018,7 @@ impl Scenario {
         for ply in plies.into_iter().flatten() {
             if let Some(ply) = ply.as_table_mut() {
                 make_absolute(ply, &["card"], &folder);
+                make_absolute(ply, &["mesh"], &folder);
             }
         }
         toml::to_string(&table).map_err(|e| error(e.to_string()))
@@ -986,6 +1152,10 @@ impl Scenario {
                 false => format!("blank.plies[{}].angle", i + 1),
             };
             ANGLE.check(&key, ply.angle)?;
+            if let Some(BlankShape::Rectangle { width, length, .. }) = ply.shape {
+                LENGTH.check(&format!("blank.plies[{}].width", i + 1), width)?;
+                LENGTH.check(&format!("blank.plies[{}].length", i + 1), length)?;
+            }
         }
         // the film's values are checked as they are read, at the run's temperature
         // (InterplyTable::friction)
@@ -1261,7 +1431,7 @@ mod tests {
              film_thickness = 0.01\n\
              yield_stress = [[280.0, 0.12], [320.0, 0.08]]\n",
         );
-        let at = |t: f64| table.friction(t).unwrap();
+        let at = |t: f64| table.friction("blank.interply", t).unwrap();
         assert_eq!(at(280.0).coulomb, 0.3);
         assert_eq!(at(320.0).shear_cap, 0.08);
         assert_eq!(at(300.0).film, 1e-6 * 186.0 / 0.01);
@@ -1273,8 +1443,14 @@ mod tests {
             "{eta} Pa·s halfway from 186 to 122"
         );
         let number = interply("friction = 0.2\n");
-        assert_eq!(number.friction(-50.0).unwrap(), FilmFriction::coulomb(0.2));
-        assert_eq!(number.friction(900.0).unwrap(), FilmFriction::coulomb(0.2));
+        assert_eq!(
+            number.friction("blank.interply", -50.0).unwrap(),
+            FilmFriction::coulomb(0.2)
+        );
+        assert_eq!(
+            number.friction("blank.interply", 900.0).unwrap(),
+            FilmFriction::coulomb(0.2)
+        );
     }
 
     /// The shear-thinning laws read from their keys, in the model's units.
@@ -1285,7 +1461,7 @@ mod tests {
              film_thickness = 0.01\nfilm_index = 0.4\nfilm_transition_stress = 0.02\n",
         );
         assert_eq!(
-            cross.friction(300.0).unwrap(),
+            cross.friction("blank.interply", 300.0).unwrap(),
             FilmFriction::cross(0.2, (186e-6, 0.4, 0.02), 0.01, f64::INFINITY)
         );
         let power = interply(
@@ -1293,7 +1469,7 @@ mod tests {
              film_thickness = 0.01\nfilm_index = 0.4\nyield_stress = 0.1\n",
         );
         assert_eq!(
-            power.friction(300.0).unwrap(),
+            power.friction("blank.interply", 300.0).unwrap(),
             FilmFriction::power_law(0.2, (3.1e-3, 0.4, DEFAULT_CUTOFF_RATE), 0.01, 0.1)
         );
     }
@@ -1344,9 +1520,97 @@ mod tests {
             ),
         ];
         for (text, expected) in cases {
-            let e = interply(text).friction(300.0).unwrap_err();
+            let e = interply(text)
+                .friction("blank.interply", 300.0)
+                .unwrap_err();
             assert!(e.contains(expected), "{text}: {e}");
         }
+    }
+
+    /// The `[blank]` table of `text` resolved at 300 °C: its layup's friction per pair.
+    fn pair_friction(text: &str) -> Result<Vec<FilmFriction>, String> {
+        let blank: BlankTable = toml::from_str(text).unwrap();
+        let blank = blank.resolve(Path::new("."), 300.0)?;
+        Ok(blank.layup.unwrap().interfaces)
+    }
+
+    const FOUR_PLIES: &str = "card = \"c.toml\"\nwidth = 1.0\nlength = 1.0\n\
+                              element_size = 1.0\n\
+                              [[plies]]\nangle = 0.0\n[[plies]]\nangle = 45.0\nname = \"core\"\n\
+                              [[plies]]\nangle = 45.0\n[[plies]]\nangle = 0.0\n";
+
+    /// `[[blank.interfaces]]` gives a pair, by places or names in either order, its own law;
+    /// the other pairs keep `blank.interply`'s, which may be left out once every pair has one.
+    #[test]
+    fn an_interface_table_overrides_the_layups_friction_for_its_pair() {
+        let text = format!(
+            "{FOUR_PLIES}[interply]\nfriction = 0.2\n\
+             [[interfaces]]\nbetween = [3, \"core\"]\nfriction = 0.5\n\
+             [[interfaces]]\nbetween = [3, 4]\nfriction = 0.1\nfilm_viscosity = 100.0\n\
+             film_thickness = 0.01\n"
+        );
+        let pairs = pair_friction(&text).unwrap();
+        assert_eq!(
+            pairs,
+            [
+                FilmFriction::coulomb(0.2),
+                FilmFriction::coulomb(0.5),
+                FilmFriction::newtonian(0.1, 1e-6 * 100.0 / 0.01, f64::INFINITY),
+            ]
+        );
+        let every = format!(
+            "{FOUR_PLIES}[[interfaces]]\nbetween = [1, 2]\nfriction = 0.3\n\
+             [[interfaces]]\nbetween = [2, 3]\nfriction = 0.3\n\
+             [[interfaces]]\nbetween = [4, 3]\nfriction = 0.3\n"
+        );
+        assert_eq!(
+            pair_friction(&every).unwrap(),
+            [FilmFriction::coulomb(0.3); 3]
+        );
+    }
+
+    /// An interface naming a ply the layup lacks, two plies not next to each other, a pair
+    /// twice, or no pair at all is refused naming the table; so is a layup with pairs left
+    /// without friction.
+    #[test]
+    fn bad_interface_tables_are_refused_naming_the_key() {
+        let cases = [
+            (
+                "between = [4, 5]\nfriction = 0.1",
+                "blank.interfaces[1].between names ply 5",
+            ),
+            ("between = [0, 1]\nfriction = 0.1", "names ply 0"),
+            (
+                "between = [\"skin\", 2]\nfriction = 0.1",
+                "\"skin\" is not one of",
+            ),
+            ("between = [1, 3]\nfriction = 0.1", "neighbouring"),
+            ("friction = 0.1", "blank.interfaces[1].between is needed"),
+            (
+                "between = [1, 2]\nfriction = 0.1\n[[interfaces]]\nbetween = [2, 1]\n\
+                 friction = 0.1",
+                "blank.interfaces[2].between: plies 1 and 2 have a table before it",
+            ),
+            (
+                "between = [1, 2]\nfriction = -0.1",
+                "blank.interfaces[1].friction",
+            ),
+            (
+                "between = [1, 2]\nfriction = 0.1\nfilm_index = 0.5",
+                "blank.interfaces[1].film_index is not a key",
+            ),
+        ];
+        for (table, expected) in cases {
+            let text = format!("{FOUR_PLIES}[interply]\nfriction = 0.2\n[[interfaces]]\n{table}\n");
+            let e = pair_friction(&text).unwrap_err();
+            assert!(e.contains(expected), "{table}: {e}");
+        }
+        let partial = format!("{FOUR_PLIES}[[interfaces]]\nbetween = [1, 2]\nfriction = 0.1\n");
+        let e = pair_friction(&partial).unwrap_err();
+        assert!(e.contains("a layup needs blank.interply.friction"), "{e}");
+        let between = format!("{FOUR_PLIES}[interply]\nfriction = 0.2\nbetween = [1, 2]\n");
+        let e = pair_friction(&between).unwrap_err();
+        assert!(e.contains("blank.interply.between is not a key"), "{e}");
     }
 
     #[test]

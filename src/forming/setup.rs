@@ -32,6 +32,10 @@ use std::sync::Arc;
 /// Contact penalty `s` of `k = s m / dt^2` (docs/model.md §6).
 const PENALTY_SCALE: f64 = 0.1;
 
+/// The places of the punch and the die in the model's tools (the holder, if any, follows).
+const PUNCH: usize = 0;
+const DIE: usize = 1;
+
 /// The holder's inertia in blank masses: heavy enough to stay stable on the contact springs of
 /// every node it touches, light enough to follow the flange.
 const HOLDER_MASS_RATIO: f64 = 10.0;
@@ -88,77 +92,74 @@ impl FormingModel {
             None => None,
         };
         let plies = ply_cards.as_ref().map_or(1, Vec::len);
-        let keyed = preflight::BlankSize::of_rectangle(s).map(|b| b.times(plies));
+        let own_outlines = s
+            .blank
+            .layup
+            .iter()
+            .flat_map(|l| &l.plies)
+            .any(|p| p.shape.is_some());
+        let keyed = preflight::BlankSize::of_rectangle(s)
+            .filter(|_| !own_outlines)
+            .map(|b| b.times(plies));
         if let Some(size) = keyed {
             early(&preflight::estimate_from_keys(s, &card, size)?);
         }
-        // the ply's, and the stack's that the tools are placed for
-        let ply_thickness = ply_cards.as_ref().map_or(&card, |c| &c[0]);
-        let ply_thickness = ply_thickness.laminate.reference_thickness();
-        let thickness = ply_thickness * plies as f64;
+        // each ply's, and the stack's that the tools are placed for
+        let cards = ply_cards.as_deref().unwrap_or(std::slice::from_ref(&card));
+        let thicknesses = layup::ply_thicknesses(cards);
+        let thickness: f64 = thicknesses.iter().sum();
         let (mesh, mut notes) = blank_mesh(s)?;
-        if keyed.is_none() {
-            let size = preflight::BlankSize::of_mesh(&mesh).times(plies);
-            early(&preflight::estimate_from_keys(s, &card, size)?);
-        }
         let element_size = match s.blank.shape {
             BlankShape::Rectangle { element_size, .. } => element_size,
             BlankShape::File { .. } => mesh.element_size(),
         };
+        let meshes = ply_meshes(s, mesh, &mut notes)?;
+        if keyed.is_none() {
+            early(&preflight::estimate_from_keys(
+                s,
+                &card,
+                preflight::BlankSize::of_meshes(&meshes),
+            )?);
+        }
         let reach = match &s.tools {
             ToolSet::BuiltIn(t) => {
-                let reach = blank_reach(&mesh, t);
+                let reach = meshes.iter().map(|m| blank_reach(m, t)).fold(0.0, f64::max);
                 check_built_in_fit(s, t, reach, thickness, element_size)?;
                 reach
             }
             ToolSet::Files(_) => 0.0,
         };
         let warp = reference_warp(s.blank.reference_direction, s.blank.ply_angle);
-        if mesh.warp_directions.is_some() && s.blank.layup.is_some() {
-            return Err(format!(
-                "{}: the blank's mesh file gives the warp direction of every element, and a \
-                 layup turns each ply's by its own angle: remove the file's orientations \
-                 (*ORIENTATION) and give the angles in blank.ply_angles or [[blank.plies]]",
-                s.origin
-            ));
-        }
-        if mesh.warp_directions.is_some() && s.blank.ply_angle != 0.0 {
-            return Err(format!(
-                "{}: the blank's mesh file gives the warp direction of every element; \
-                 blank.ply_angle = {} would turn it again: set it in the file (*ORIENTATION) or \
-                 leave blank.ply_angle out",
-                s.origin, s.blank.ply_angle
-            ));
-        }
+        check_file_orientations(s, &meshes)?;
         notes.extend(describe_poor_projections(
-            &poor_projections(&mesh, &warp),
-            mesh.cells.len(),
+            &poor_projections(&meshes[0], &warp),
+            meshes[0].cells.len(),
         ));
-        let mut constraints = boundary_constraints(s, &mesh)?;
-        if let Some(pin) = locating_pin(s, &mesh, &constraints) {
-            let at = mesh.nodes[pin.nodes[0]];
-            notes.push(format!(
-                "no friction holds the blank across the stroke: its node at ({:.1}, {:.1}) mm, \
-                 the nearest the punch's axis, is held in x and y, as a locating pin would \
-                 (docs/solver.md, \"A frictionless blank is located\")",
-                at.x, at.y
-            ));
-            constraints.push(pin);
-        }
-        preflight::check_holder_pressure(s, mesh.total_area())?;
-        let blank_mass = card.density * thickness * mesh.total_area();
+        let constraints = ply_constraints(s, &meshes, &mut notes)?;
+        let largest = meshes.iter().map(Mesh::total_area).fold(0.0, f64::max);
+        preflight::check_holder_pressure(s, largest)?;
+        let blank_mass = cards
+            .iter()
+            .zip(&thicknesses)
+            .zip(&meshes)
+            .map(|((c, t), m)| c.density * t * m.total_area())
+            .sum();
         let p = &s.process;
         let mut model = match (&s.blank.layup, &ply_cards) {
-            (Some(l), Some(cards)) => layup::layup_model(s, l, cards, &mesh, &constraints)?,
-            _ => Model::new(
-                mesh,
-                card.laminate.time_scaled(p.time_scaling),
-                card.density,
-                p.temperature,
-                warp,
-                constraints,
-            )
-            .map_err(|e| e.to_string())?,
+            (Some(l), Some(cards)) => layup::layup_model(s, l, cards, meshes, constraints)?,
+            _ => {
+                let (mesh, constraints) =
+                    meshes.into_iter().zip(constraints).next().ok_or("no ply")?;
+                Model::new(
+                    mesh,
+                    card.laminate.time_scaled(p.time_scaling),
+                    card.density,
+                    p.temperature,
+                    warp,
+                    constraints,
+                )
+                .map_err(|e| e.to_string())?
+            }
         };
         if let (Some(bending), None) = (&card.bending, &s.blank.layup) {
             let rigidity = bending
@@ -174,18 +175,12 @@ impl FormingModel {
         };
         let (tools, holder_tool) = match &s.tools {
             ToolSet::BuiltIn(t) => built_in_tool_set(s, t, (thickness, reach), punch, blank_mass)?,
-            ToolSet::Files(f) => {
-                let set = file_tool_set(s, f, (thickness, blank_mass), punch, &mut notes)?;
-                check_start_positions(&model, &set.0, ply_thickness)?;
-                set
-            }
+            ToolSet::Files(f) => file_tool_set(s, f, (thickness, blank_mass), punch, &mut notes)?,
         };
-        let contact = ContactSettings {
-            offset: 0.5 * ply_thickness,
-            penalty_scale: PENALTY_SCALE,
-            max_penetration: ply_thickness,
-        };
-        let model = model.with_tools(tools, contact);
+        let model = with_tools_on_the_outer_plies(model, tools, &thicknesses);
+        if let ToolSet::Files(_) = s.tools {
+            check_start_positions(&model)?;
+        }
         let end_time = punch.time_to(p.stroke);
         let settings = SolverSettings {
             end_time,
@@ -219,8 +214,8 @@ impl FormingModel {
             flange_radius,
             ridge_half_length: s.ridge_half_length(),
             element_size,
-            punch_tool: 0,
-            die_tool: 1,
+            punch_tool: PUNCH,
+            die_tool: DIE,
             holder_tool,
             notes,
             estimate,
@@ -276,7 +271,13 @@ fn soft_bending_note(s: &Scenario) -> Option<String> {
 /// the reader's notes. A file's must be one sheet of shell or membrane elements
 /// (`MeshImport::into_blank`).
 pub fn blank_mesh(s: &Scenario) -> Result<(Mesh, Vec<String>), String> {
-    match &s.blank.shape {
+    shape_mesh(&s.blank.shape, "blank")
+}
+
+/// The mesh of `shape`, the outline of the blank or of a ply (`key` its table, named in
+/// messages), with the reader's notes.
+fn shape_mesh(shape: &BlankShape, key: &str) -> Result<(Mesh, Vec<String>), String> {
+    match shape {
         BlankShape::Rectangle {
             width,
             length,
@@ -293,7 +294,7 @@ pub fn blank_mesh(s: &Scenario) -> Result<(Mesh, Vec<String>), String> {
             let import = match element_set {
                 Some(set) => import
                     .restricted_to(set)
-                    .map_err(|e| format!("{file}: blank.element_set: {e}"))?,
+                    .map_err(|e| format!("{file}: {key}.element_set: {e}"))?,
                 None => import,
             };
             let (mesh, notes) = import.into_blank().map_err(|e| e.to_string())?;
@@ -311,6 +312,82 @@ pub fn blank_mesh(s: &Scenario) -> Result<(Mesh, Vec<String>), String> {
     }
 }
 
+/// Each ply's mesh from the punch's side, `blank` where a ply has no outline of its own (the
+/// blank's alone for a blank of one ply), the readers' notes added to `notes`.
+fn ply_meshes(s: &Scenario, blank: Mesh, notes: &mut Vec<String>) -> Result<Vec<Mesh>, String> {
+    let Some(layup) = &s.blank.layup else {
+        return Ok(vec![blank]);
+    };
+    let mut meshes = Vec::with_capacity(layup.plies.len());
+    for (i, ply) in layup.plies.iter().enumerate() {
+        let mesh = match &ply.shape {
+            Some(shape) => {
+                let (mesh, read) = shape_mesh(shape, &format!("blank.plies[{}]", i + 1))?;
+                notes.extend(read);
+                mesh
+            }
+            None => blank.clone(),
+        };
+        meshes.push(mesh);
+    }
+    Ok(meshes)
+}
+
+/// A mesh file's own warp directions stand for a blank of one ply at `blank.ply_angle = 0`;
+/// a layup turns each ply by its own angle.
+fn check_file_orientations(s: &Scenario, meshes: &[Mesh]) -> Result<(), String> {
+    if !meshes.iter().any(|m| m.warp_directions.is_some()) {
+        return Ok(());
+    }
+    if s.blank.layup.is_some() {
+        return Err(format!(
+            "{}: a mesh file of the layup gives the warp direction of every element, and a \
+             layup turns each ply's by its own angle: remove the file's orientations \
+             (*ORIENTATION) and give the angles in blank.ply_angles or [[blank.plies]]",
+            s.origin
+        ));
+    }
+    if s.blank.ply_angle != 0.0 {
+        return Err(format!(
+            "{}: the blank's mesh file gives the warp direction of every element; \
+             blank.ply_angle = {} would turn it again: set it in the file (*ORIENTATION) or \
+             leave blank.ply_angle out",
+            s.origin, s.blank.ply_angle
+        ));
+    }
+    Ok(())
+}
+
+/// Each ply's constraints on its own mesh: the `[[boundary]]` sets, and where no friction
+/// holds the blank a locating pin at its node nearest the punch's axis (said in `notes`).
+fn ply_constraints(
+    s: &Scenario,
+    meshes: &[Mesh],
+    notes: &mut Vec<String>,
+) -> Result<Vec<Vec<Constraint>>, String> {
+    let mut all = Vec::with_capacity(meshes.len());
+    for (i, mesh) in meshes.iter().enumerate() {
+        let mut constraints = boundary_constraints(s, mesh).map_err(|e| match &s.blank.layup {
+            Some(l) => format!("{e} (on blank.plies[{}], \"{}\")", i + 1, l.plies[i].name),
+            None => e,
+        })?;
+        if let Some(pin) = locating_pin(s, mesh, &constraints) {
+            if i == 0 {
+                let at = mesh.nodes[pin.nodes[0]];
+                notes.push(format!(
+                    "no friction holds the blank across the stroke: its node at ({:.1}, {:.1}) \
+                     mm, the nearest the punch's axis, is held in x and y, as a locating pin \
+                     would (docs/solver.md, \"A frictionless blank is located\")",
+                    at.x, at.y
+                ));
+            }
+            constraints.push(pin);
+        }
+        all.push(constraints);
+    }
+    Ok(all)
+}
+
 /// The built-in tools' checks that need the blank's mesh: the clearance, the element size
 /// against the punch, and a file's blank reaching (`reach` from the ridge) over the holder.
 fn check_built_in_fit(
@@ -323,7 +400,8 @@ fn check_built_in_fit(
     let clearance = t.die_opening_radius - t.punch_radius;
     if clearance < thickness {
         return Err(format!(
-            "{}: the die opening leaves {} mm around the punch, less than the ply's {} mm",
+            "{}: the die opening leaves {} mm around the punch, less than the blank's {} mm \
+             thickness (a layup's: its plies together)",
             s.origin,
             shown_apart(clearance, thickness),
             shown(thickness)
@@ -655,13 +733,32 @@ fn check_stroke(s: &Scenario, punch: &TriangleSurface, file: &Path) -> Result<()
     Ok(())
 }
 
+/// `model` with `tools`, the punch and holder below the blank touching the first ply of
+/// `thicknesses` (from the punch's side), the die above it the last: each tool's contact
+/// offset half the thickness of the ply next to it.
+fn with_tools_on_the_outer_plies(
+    model: Model,
+    tools: Vec<RigidTool>,
+    thicknesses: &[f64],
+) -> Model {
+    let (first, last) = (thicknesses[0], thicknesses[thicknesses.len() - 1]);
+    let contact = ContactSettings {
+        offset: 0.5 * first,
+        penalty_scale: PENALTY_SCALE,
+        max_penetration: thicknesses.iter().copied().fold(f64::INFINITY, f64::min),
+    };
+    model
+        .with_tools(tools, contact)
+        .with_tool_offset(DIE, 0.5 * last)
+}
+
 /// No blank node may start inside a tool: the first contact force would fling it out.
-fn check_start_positions(model: &Model, tools: &[RigidTool], thickness: f64) -> Result<(), String> {
-    let half = 0.5 * thickness;
-    for tool in tools {
+fn check_start_positions(model: &Model) -> Result<(), String> {
+    for (k, tool) in model.tools.iter().enumerate() {
+        let half = model.tool_contact(k).offset;
         for (node, x) in model.mesh.nodes.iter().enumerate() {
             let gap = tool.gap(x, half);
-            if gap < -START_PENETRATION_LIMIT * thickness {
+            if gap < -START_PENETRATION_LIMIT * 2.0 * half {
                 return Err(format!(
                     "the blank starts {:.3} mm inside the {} at node {node} ({:.2}, {:.2}, \
                      {:.2}) mm: place the tool surfaces as at the start of the stroke, half the \

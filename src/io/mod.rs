@@ -62,13 +62,33 @@ pub fn from_toml_value<T: serde::de::DeserializeOwned>(value: toml::Value) -> Re
     })
 }
 
-/// `key `a.b`: ` for a path inside the document, nothing at its root.
+/// `key `a.b`: ` for a path inside the document, nothing at its root; a list's element by its
+/// place from 1 (`a[1]` the first), as `--set` names it.
 fn key_of(path: &serde_path_to_error::Path) -> String {
-    let path = path.to_string();
-    if path.is_empty() || path == "." {
+    use serde_path_to_error::Segment;
+    let mut key = String::new();
+    for segment in path.iter() {
+        match segment {
+            Segment::Seq { index } => key += &format!("[{}]", index + 1),
+            Segment::Map { key: name } => {
+                if !key.is_empty() {
+                    key.push('.');
+                }
+                key += name;
+            }
+            Segment::Enum { variant } => {
+                if !key.is_empty() {
+                    key.push('.');
+                }
+                key += variant;
+            }
+            Segment::Unknown => key += ".?",
+        }
+    }
+    if key.is_empty() {
         String::new()
     } else {
-        format!("key `{path}`: ")
+        format!("key `{key}`: ")
     }
 }
 
@@ -114,6 +134,20 @@ mod tests {
         let value: toml::Value = toml::from_str("[process]\nstroke = \"abc\"\n").unwrap();
         let e = from_toml_value::<Doc>(value).unwrap_err();
         assert!(e.starts_with("key `process.stroke`: "), "{e}");
+    }
+
+    #[derive(serde::Deserialize, Debug)]
+    #[allow(dead_code)]
+    struct Layup {
+        plies: Vec<Process>,
+    }
+
+    /// A list's element is named by its place from 1, as `--set plies[2].stroke=1` names it.
+    #[test]
+    fn an_element_of_a_list_is_named_by_its_place_from_one() {
+        let e = from_toml_text::<Layup>("[[plies]]\nstroke = 1.0\n[[plies]]\nstroke = \"x\"\n")
+            .unwrap_err();
+        assert!(e.contains("key `plies[2].stroke`: "), "{e}");
     }
 
     #[test]

@@ -230,7 +230,12 @@ fn contact_fields(model: &Model, state: &State) -> Vec<Field> {
         let gaps = state
             .positions
             .iter()
-            .map(|x| tool.gap(&(x - state.tool_translations[k]), model.contact.offset))
+            .map(|x| {
+                tool.gap(
+                    &(x - state.tool_translations[k]),
+                    model.tool_contact(k).offset,
+                )
+            })
             .collect();
         fields.push(Field {
             name: format!("gap_{}", tool.name.replace(' ', "_")),

@@ -8,6 +8,7 @@ pub mod conformity;
 pub mod file;
 pub mod gmsh;
 pub mod orientation;
+pub mod outline;
 pub mod rectangle;
 
 pub use cell::Cell;

@@ -304,7 +304,7 @@ impl Watch {
             &model.tools,
             &state.tool_translations,
             &state.positions,
-            &model.contact,
+            &model.tool_contacts(),
         );
         self.most_tunnelled = self.most_tunnelled.max(tunnelled);
         if tunnelled as f64 > TUNNELLED_STOP_FRACTION * self.nodes as f64 {

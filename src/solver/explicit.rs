@@ -325,7 +325,7 @@ fn tool_contact(model: &Model, state: &mut State, dt: f64) {
         (&state.tool_translations, &velocities),
         nodes,
         dt,
-        &model.contact,
+        &model.tool_contacts(),
         &mut state.contacts,
     );
 }

@@ -88,7 +88,12 @@ pub struct Model {
     pub bending: Option<Bending>,
     /// Rigid tools in contact with the blank, and how the contact is computed.
     pub tools: Vec<RigidTool>,
+    /// How the contact with the tools is computed; its `offset` is every tool's unless
+    /// [`Self::with_tool_offset`] gives a tool its own.
     pub contact: ContactSettings,
+    /// Per tool, where given, the distance from the mid-surface of the ply it touches to its
+    /// face (mm): half that ply's thickness, for a layup of plies of several thicknesses.
+    tool_offsets: Vec<Option<f64>>,
     pub plies: Vec<Ply>,
     /// The plies that touch, with the friction between them (docs/model.md §6, "Ply–ply
     /// contact"); none on a blank of one ply.
@@ -238,6 +243,7 @@ impl Model {
             elements,
             bending: None,
             tools: Vec::new(),
+            tool_offsets: Vec::new(),
             contact: ContactSettings {
                 offset: thickness / 2.0,
                 penalty_scale: 0.1,
@@ -372,9 +378,33 @@ impl Model {
 
     /// The same sheet between rigid tools, with the contact settings given.
     pub fn with_tools(mut self, tools: Vec<RigidTool>, contact: ContactSettings) -> Self {
+        self.tool_offsets = vec![None; tools.len()];
         self.tools = tools;
         self.contact = contact;
         self
+    }
+
+    /// The same model with tool `k` touching a ply whose mid-surface lies `offset` (mm) from
+    /// the tool's face: half the thickness of the ply next to it.
+    pub fn with_tool_offset(mut self, k: usize, offset: f64) -> Self {
+        self.tool_offsets[k] = Some(offset);
+        self
+    }
+
+    /// The contact of tool `k` with the blank: [`Self::contact`] with the tool's own offset.
+    pub fn tool_contact(&self, k: usize) -> ContactSettings {
+        let offset = self.tool_offsets.get(k).copied().flatten();
+        ContactSettings {
+            offset: offset.unwrap_or(self.contact.offset),
+            ..self.contact
+        }
+    }
+
+    /// Every tool's [`Self::tool_contact`], in the order of [`Self::tools`].
+    pub fn tool_contacts(&self) -> Vec<ContactSettings> {
+        (0..self.tools.len())
+            .map(|k| self.tool_contact(k))
+            .collect()
     }
 
     /// The blank's mass without mass scaling, `sum_e rho t A` (tonne).

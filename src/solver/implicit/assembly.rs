@@ -399,18 +399,37 @@ struct ElementShare {
 /// One element's stiffness, in 3x3 blocks of its nodes.
 type ElementBlocks = [[Matrix3<f64>; 4]; 4];
 
+/// What the ply–ply contact keeps over an increment: each node's lists, friction lags and held
+/// faces.
+type KeptContact<'a> = (
+    &'a [InterplyNode],
+    &'a [[Option<PlyLag>; 2]],
+    &'a [[Option<HeldFace>; 2]],
+);
+
 impl Evaluator<'_> {
     /// The ply–ply contact of the increment from `start`, where the model has interfaces.
     pub fn interply<'s>(&'s self, start: &IncrementStart<'s>) -> Option<Interply<'s>> {
+        let kept = (start.ply_lists, start.ply_lags, start.ply_faces);
+        self.interply_over(kept, start.dt)
+    }
+
+    /// The ply–ply contact of an increment of `dt` over the node's `lists`, friction `lags`
+    /// and held `faces` (none: each node's nearest), where the model has interfaces.
+    pub fn interply_over<'s>(
+        &'s self,
+        (lists, lags, faces): KeptContact<'s>,
+        dt: f64,
+    ) -> Option<Interply<'s>> {
         Some(Interply {
             contact: self.plies?,
-            lists: start.ply_lists,
-            lags: start.ply_lags,
-            faces: start.ply_faces,
+            lists,
+            lags,
+            faces,
             springs: &self.layout.penalty,
             margin: contact_margin(&self.model.contact),
             stick: self.stick_slip,
-            dt: start.dt,
+            dt,
         })
     }
 
@@ -697,7 +716,7 @@ impl Evaluator<'_> {
             &y,
             nearest,
             self.layout.penalty[n],
-            &self.model.contact,
+            &self.model.tool_contact(k),
             start.friction[n][k].as_ref(),
             PairOptions {
                 slip: self.stick_slip,

@@ -44,8 +44,7 @@ pub fn entering(
     known: &[Entry],
 ) -> Vec<Entry> {
     let tools = model.tools.len();
-    let settings = &model.contact;
-    let margin = contact_margin(settings);
+    let settings = model.tool_contacts();
     let tool_steps: Vec<Vector3<f64>> = (0..tools)
         .map(|k| match (layout.tool_unknown[k], layout.tool_force[k]) {
             (Some(u), Some((axis, _))) => axis * direction[u],
@@ -63,7 +62,8 @@ pub fn entering(
                 continue;
             }
             let (normal, distance) = p.direction_to(&(position - translation));
-            let gap = distance - settings.offset - margin;
+            let margin = contact_margin(&settings[k]);
+            let gap = distance - settings[k].offset - margin;
             if gap < 0.0 {
                 continue; // in the spring: the tangent has it
             }

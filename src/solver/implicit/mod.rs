@@ -646,11 +646,11 @@ fn rest_state(model: &Model) -> State {
 /// to rest on, and at a gap of exactly zero the springs have no stiffness yet, so Newton's
 /// method would have nothing to converge to.
 fn seat_force_driven_tools(model: &Model, layout: &Layout, state: &mut State) {
-    let offset = model.contact.offset;
     for (k, tool) in model.tools.iter().enumerate() {
         let ToolMotion::Force { force, .. } = &tool.motion else {
             continue;
         };
+        let offset = model.tool_contact(k).offset;
         let axis = force.normalize();
         for _ in 0..3 {
             let translation = state.tool_translations[k];
@@ -793,7 +793,7 @@ fn increment(
     // the contact's own test sees the tools' triangles near each node only: a tool that moved
     // past a node in one increment is found by a full search
     let model = evaluator.model;
-    let through = nodes_through_tools(&model.tools, &solved.2, &solved.1, &model.contact);
+    let through = nodes_through_tools(&model.tools, &solved.2, &solved.1, &model.tool_contacts());
     if through > 0 {
         return Err(NotConverged {
             worst_nodes: Vec::new(),
@@ -914,19 +914,8 @@ fn accept_interply(
     dt: f64,
 ) {
     let (slips, lags) = {
-        let start = IncrementStart {
-            positions: &state.positions,
-            strains: &converged.strains,
-            laminate_states: &state.laminate_states,
-            friction: &converged.friction,
-            velocities: &state.velocities,
-            masses: &state.masses,
-            dt,
-            ply_lags: &converged.ply_lags,
-            ply_lists: &state.interply,
-            ply_faces: &[],
-        };
-        let Some(plies) = evaluator.interply(&start) else {
+        let kept = (&state.interply[..], &converged.ply_lags[..], &[][..]);
+        let Some(plies) = evaluator.interply_over(kept, dt) else {
             return;
         };
         (
