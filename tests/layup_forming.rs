@@ -374,23 +374,11 @@ fn thin_under_thick(dir: &std::path::Path) -> std::path::PathBuf {
         card.replace("fabric_thickness = 0.23\n", "fabric_thickness = 0.46\n"),
     )
     .unwrap();
-    let example = std::fs::read_to_string(common::repo_path("examples/hemisphere-layup.toml"))
-        .unwrap()
-        .replace(
-            "\"../materials/t300-5hs-pps.toml\"",
-            &format!("{shipped:?}"),
-        );
-    let start = example.find("ply_angles = ").unwrap();
-    let end = start + example[start..].find('\n').unwrap();
-    let scenario = format!(
-        "{}{}\n[[blank.plies]]\nangle = 0.0\nname = \"thin\"\n\
-         [[blank.plies]]\nangle = 45.0\nname = \"thick\"\ncard = {thick:?}\n",
-        &example[..start],
-        &example[end..]
+    let plies = format!(
+        "[[blank.plies]]\nangle = 0.0\nname = \"thin\"\n\
+         [[blank.plies]]\nangle = 45.0\nname = \"thick\"\ncard = {thick:?}\n"
     );
-    let path = dir.join("thin-under-thick.toml");
-    std::fs::write(&path, scenario).unwrap();
-    path
+    layup_scenario(dir, &plies, "")
 }
 
 /// Plies of two thicknesses are stacked each on the one below it: their mid-surfaces

@@ -349,7 +349,12 @@ fn write_slip_map(
     let title = format!("{part}: interply slip (top view)");
     let label = "interply slip (mm)".to_string();
     let path = dir.join(SLIP_MAP);
-    write_map_png(&path, &ply_map(forming, state, title, (values, label), None), 900, 700)?;
+    write_map_png(
+        &path,
+        &ply_map(forming, state, title, (values, label), None),
+        900,
+        700,
+    )?;
     Ok(path)
 }
 
