@@ -452,15 +452,7 @@ fn plies_of_two_thicknesses_form_without_overlapping() {
     assert!((result.records.last().unwrap().stroke - 6.0).abs() < 1e-9);
     let model = &forming.model;
     let t = |p: usize| model.plies[p].laminate.reference_thickness();
-    let contact = model.ply_contact(1.0).unwrap();
-    let triangles = 2 * model.plies[1].elements.len() as u32;
-    let all: Vec<u32> = (0..triangles).collect();
-    let deepest = model.plies[0]
-        .nodes
-        .clone()
-        .filter_map(|a| contact.nearest(a, 1, &all, &state.positions))
-        .map(|touch| -touch.gap)
-        .fold(f64::NEG_INFINITY, f64::max);
+    let deepest = deepest_into_neighbour(model, state, 0, 1);
     assert!(
         deepest < 0.1 * t(0),
         "a node {deepest} mm into the other ply"
@@ -476,6 +468,26 @@ fn plies_of_two_thicknesses_form_without_overlapping() {
         punch < 0.1 * t(0) && die < 0.1 * t(1),
         "punch {punch} mm, die {die} mm deep"
     );
+}
+
+/// How deep (mm) the deepest node of ply `ply` lies in `state` inside the ply across `side`
+/// (0 below, 1 above), over every triangle of that ply.
+fn deepest_into_neighbour(
+    model: &thermostamp::solver::Model,
+    state: &thermostamp::solver::State,
+    ply: usize,
+    side: usize,
+) -> f64 {
+    let contact = model.ply_contact(1.0).unwrap();
+    let other = if side == 0 { ply - 1 } else { ply + 1 };
+    let triangles = model.ply_surfaces()[other].triangles.len() as u32;
+    let all: Vec<u32> = (0..triangles).collect();
+    model.plies[ply]
+        .nodes
+        .clone()
+        .filter_map(|a| contact.nearest(a, side, &all, &state.positions))
+        .map(|touch| -touch.gap)
+        .fold(f64::NEG_INFINITY, f64::max)
 }
 
 /// The tutorial's layup with `plies` (TOML of `[[blank.plies]]` tables) instead of its angles
@@ -522,15 +534,8 @@ fn a_ply_of_its_own_outline_from_a_gmsh_file_forms_over_a_square_one() {
     let state = result.outcome.as_ref().unwrap();
     assert!((result.records.last().unwrap().stroke - 6.0).abs() < 1e-9);
     let model = &forming.model;
-    let contact = model.ply_contact(1.0).unwrap();
-    let all: Vec<u32> = (0..2 * model.plies[0].elements.len() as u32).collect();
     let t = model.plies[1].laminate.reference_thickness();
-    let deepest = model.plies[1]
-        .nodes
-        .clone()
-        .filter_map(|a| contact.nearest(a, 0, &all, &state.positions))
-        .map(|touch| -touch.gap)
-        .fold(f64::NEG_INFINITY, f64::max);
+    let deepest = deepest_into_neighbour(model, state, 1, 0);
     assert!(
         deepest < 0.1 * t,
         "a node of the disk {deepest} mm into the square"

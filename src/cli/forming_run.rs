@@ -5,6 +5,7 @@ use super::shared::{
     print_checked_table, status_row, take_output_folder, with_threads, Bar, Interrupt,
     ScenarioArgs, Watch,
 };
+use crate::contact::ply_contact::InterplyNode;
 use crate::experiment::sheet_test::{FrameOutput, HistorySink, LiveOutput};
 use crate::forming::advice::stop_advice;
 use crate::forming::export::{write_formed_blank, FORMED_INP, FORMED_VTU};
@@ -334,11 +335,7 @@ fn write_slip_map(
     forming: &FormingModel,
     (state, part): (&crate::solver::State, String),
 ) -> anyhow::Result<PathBuf> {
-    let slip: Vec<f64> = state
-        .interply
-        .iter()
-        .map(|c| c.sides.iter().map(|s| s.slip).fold(0.0, f64::max))
-        .collect();
+    let slip: Vec<f64> = state.interply.iter().map(InterplyNode::slip).collect();
     let values = forming
         .model
         .mesh

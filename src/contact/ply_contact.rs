@@ -82,6 +82,13 @@ pub struct InterplyNode {
     pub sides: [SideContact; 2],
 }
 
+impl InterplyNode {
+    /// How far the node has slid over its neighbours (mm): the farther of its two sides.
+    pub fn slip(&self) -> f64 {
+        self.sides.iter().map(|s| s.slip).fold(0.0, f64::max)
+    }
+}
+
 /// The contact between the plies of a layup and what it keeps from step to step.
 #[derive(Clone, Debug)]
 pub struct PlyContact {

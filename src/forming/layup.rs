@@ -96,8 +96,7 @@ pub fn layup_model(
             warp_direction: reference_warp(s.blank.reference_direction, ply.angle),
         });
     }
-    let constraints = held;
-    let mut model = Model::layup(sheets, p.temperature, constraints).map_err(|e| e.to_string())?;
+    let mut model = Model::layup(sheets, p.temperature, held).map_err(|e| e.to_string())?;
     if cards.iter().any(|c| c.bending.is_some()) {
         let none = BendingRigidity {
             warp: 0.0,

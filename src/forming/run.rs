@@ -3,6 +3,7 @@
 //! shear angle, energies) and ParaView frames.
 
 use super::setup::FormingModel;
+use crate::contact::ply_contact::InterplyNode;
 use crate::experiment::sheet_test::{LiveOutput, Progress};
 use crate::solver::checks::{self, CheckReport, CheckSettings};
 use crate::solver::implicit::{self, ImplicitSettings, ImplicitStatistics};
@@ -424,7 +425,7 @@ pub fn ply_measures(f: &FormingModel, state: &State) -> Vec<PlyMeasures> {
                 .get(ply.nodes.clone())
                 .into_iter()
                 .flatten()
-                .flat_map(|c| c.sides.iter().map(|s| s.slip))
+                .map(InterplyNode::slip)
                 .fold(0.0_f64, f64::max);
             PlyMeasures {
                 max_shear: shear[ply.elements.clone()]

@@ -605,22 +605,20 @@ impl BlankTable {
                 );
             }
         }
-        let default = match (&self.interply, own.iter().all(Option::is_some)) {
-            (Some(table), _) => Some(table.friction("blank.interply", temperature)?),
-            (None, true) => None,
-            (None, false) => {
-                return Err(
-                    "a layup needs blank.interply.friction, the Coulomb friction \
-                            between its plies (docs/model.md, \"Friction through the molten \
-                            film\"), unless a [[blank.interfaces]] table gives every pair's"
-                        .into(),
-                )
-            }
+        let default = match &self.interply {
+            Some(table) => Some(table.friction("blank.interply", temperature)?),
+            None => None,
         };
-        Ok(own
-            .into_iter()
-            .map(|f| f.or(default).expect("a default where a pair has no table"))
-            .collect())
+        own.into_iter()
+            .map(|f| {
+                f.or(default).ok_or_else(|| {
+                    "a layup needs blank.interply.friction, the Coulomb friction between its \
+                     plies (docs/model.md, \"Friction through the molten film\"), unless a \
+                     [[blank.interfaces]] table gives every pair's"
+                        .to_string()
+                })
+            })
+            .collect()
     }
 }
 

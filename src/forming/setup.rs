@@ -177,7 +177,7 @@ impl FormingModel {
             ToolSet::BuiltIn(t) => built_in_tool_set(s, t, (thickness, reach), punch, blank_mass)?,
             ToolSet::Files(f) => file_tool_set(s, f, (thickness, blank_mass), punch, &mut notes)?,
         };
-        let model = with_tools_on_the_outer_plies(model, tools, &thicknesses);
+        let model = with_tools_on_the_outer_plies(model, tools);
         if let ToolSet::Files(_) = s.tools {
             check_start_positions(&model)?;
         }
@@ -733,19 +733,17 @@ fn check_stroke(s: &Scenario, punch: &TriangleSurface, file: &Path) -> Result<()
     Ok(())
 }
 
-/// `model` with `tools`, the punch and holder below the blank touching the first ply of
-/// `thicknesses` (from the punch's side), the die above it the last: each tool's contact
-/// offset half the thickness of the ply next to it.
-fn with_tools_on_the_outer_plies(
-    model: Model,
-    tools: Vec<RigidTool>,
-    thicknesses: &[f64],
-) -> Model {
-    let (first, last) = (thicknesses[0], thicknesses[thicknesses.len() - 1]);
+/// `model` with `tools`, the punch and holder below the blank touching its first ply (from the
+/// punch's side), the die above it the last: each tool's contact offset half the thickness of
+/// the ply next to it, the contact's reach the thinnest ply's.
+fn with_tools_on_the_outer_plies(model: Model, tools: Vec<RigidTool>) -> Model {
+    // a model has a ply at least (`Model::layup`)
+    let thickness = |k: usize| model.plies[k].laminate.reference_thickness();
+    let (first, last) = (thickness(0), thickness(model.plies.len() - 1));
     let contact = ContactSettings {
         offset: 0.5 * first,
         penalty_scale: PENALTY_SCALE,
-        max_penetration: thicknesses.iter().copied().fold(f64::INFINITY, f64::min),
+        max_penetration: model.thinnest_ply(),
     };
     model
         .with_tools(tools, contact)

@@ -1,6 +1,7 @@
 //! The state of a sheet as ParaView fields: what an engineer colours the part by.
 
 use super::vtk::{Field, FieldData};
+use crate::contact::ply_contact::InterplyNode;
 use crate::material::fabric::shear_angle;
 use crate::material::laminate::Laminate;
 use crate::material::{MaterialError, MembraneKinematics};
@@ -162,7 +163,6 @@ fn layer_names(laminate: &Laminate) -> Vec<Option<String>> {
     names
 }
 
-/// Contact pressure, status and gaps of every node (see [`sheet_frame`]).
 /// The plies' contact at each node: the pressure of its neighbours on it (MPa, both sides
 /// summed) and how far it has slid over them (mm, the farther of its two sides).
 fn interply_fields(model: &Model, state: &State) -> Vec<Field> {
@@ -173,11 +173,7 @@ fn interply_fields(model: &Model, state: &State) -> Vec<Field> {
         .zip(&nodal_area)
         .map(|(c, a)| c.sides.iter().map(|s| s.normal_force).sum::<f64>() / a)
         .collect();
-    let slip = state
-        .interply
-        .iter()
-        .map(|c| c.sides.iter().map(|s| s.slip).fold(0.0, f64::max))
-        .collect();
+    let slip = state.interply.iter().map(InterplyNode::slip).collect();
     vec![
         Field {
             name: "interply_pressure".into(),
@@ -190,6 +186,7 @@ fn interply_fields(model: &Model, state: &State) -> Vec<Field> {
     ]
 }
 
+/// Contact pressure, status and gaps of every node (see [`sheet_frame`]).
 fn contact_fields(model: &Model, state: &State) -> Vec<Field> {
     let nodal_area = model.nodal_areas();
     let pressure = state
