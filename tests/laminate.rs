@@ -347,3 +347,47 @@ fn initial_shear_modulus_is_the_thickness_mean_of_the_layers() {
         "{g} MPa, expected {expected} MPa"
     );
 }
+
+/// The yarn tensions written with the results (docs/model.md §4) are the yarns' nominal
+/// forces: stretched along warp and weft (a square net, no shear), the laminate's warp tension
+/// is `lambda_a N_aa` of its fabric layer alone, the weft's `lambda_b N_bb`, and the molten
+/// skins add nothing to them; a yarn left at its length carries none.
+#[test]
+fn yarn_tensions_are_the_fabric_layers_nominal_forces_along_the_yarns() {
+    let card = t300_card();
+    let fabric_layer = card.laminate.layers()[1].clone();
+    let fabric_only = Laminate::new(vec![fabric_layer]).unwrap();
+    let angle: f64 = 0.4;
+    let (a, b) = (
+        Vector2::new(angle.cos(), angle.sin()),
+        Vector2::new(-angle.sin(), angle.cos()),
+    );
+    for (la, lb) in [(1.01, 1.0), (1.03, 1.02), (1.0, 1.005)] {
+        let f =
+            Matrix2::identity() + a * a.transpose() * (la - 1.0) + b * b.transpose() * (lb - 1.0);
+        let kin = kinematics(&f, &Matrix2::zeros(), angle);
+        let mut state = fabric_only.initial_state();
+        let n = fabric_only
+            .membrane_response(&kin, 0.0, &mut state)
+            .unwrap()
+            .n;
+        let nominal = [la * a.dot(&(n * a)), lb * b.dot(&(n * b))];
+        let mut sheet = card.laminate.initial_state();
+        card.laminate
+            .membrane_response(&kin, 0.0, &mut sheet)
+            .unwrap();
+        let tensions = card.laminate.yarn_tensions(&kin, &sheet).unwrap();
+        for k in 0..2 {
+            assert!(
+                (tensions[k] - nominal[k]).abs() <= 1e-9 * nominal[0].abs(),
+                "stretches {la}, {lb}: yarn {k}: {} against {}",
+                tensions[k],
+                nominal[k]
+            );
+        }
+        if lb == 1.0 {
+            assert!(tensions[1].abs() < 1e-12, "{}", tensions[1]);
+        }
+        assert!(tensions[0] > 0.0 || la == 1.0);
+    }
+}

@@ -24,7 +24,7 @@ struct Grid {
     shared_points: usize,
     /// "point NAME" or "cell NAME" -> (components, component names, non-finite values)
     arrays: BTreeMap<String, (usize, String, usize)>,
-    /// field-data string arrays: name -> values joined by '|'
+    /// field-data arrays: name -> values joined by '|'
     fields: BTreeMap<String, String>,
 }
 
@@ -103,8 +103,8 @@ fn parse(text: &str) -> Read {
             }
             "field" => {
                 let grid = read.grids.get_mut(&current).unwrap();
-                let (_, values) = line.split_once(" values ").unwrap();
-                grid.fields.insert(words[1].to_string(), values.to_string());
+                let (name, values) = line["field ".len()..].split_once(" values ").unwrap();
+                grid.fields.insert(name.to_string(), values.to_string());
             }
             other => panic!("unexpected reader line '{other}': {line}"),
         }
@@ -123,6 +123,8 @@ fn sheet_arrays(contact: bool, stresses: &[&str]) -> BTreeMap<String, String> {
         ("cell weft", "x,y,z"),
         ("cell thickness", "-"),
         ("cell membrane_force", "xx,yy,xy"),
+        ("cell yarn_tension_warp", "-"),
+        ("cell yarn_tension_weft", "-"),
     ]
     .iter()
     .map(|(n, c)| (n.to_string(), c.to_string()))
@@ -258,10 +260,26 @@ fn every_paraview_file_reads_in_vtk_as_written() {
     ] {
         let grid = &read.grids[name];
         assert_grid(name, grid, (289, 512), &forming);
-        assert_eq!(
-            grid.fields["contact_status_codes"], "0 free|1 punch|2 die|3 blank holder",
-            "{name}"
-        );
+        for (k, meaning) in ["free", "punch", "die", "blank holder"].iter().enumerate() {
+            assert_eq!(
+                grid.fields[&format!("contact_status {k} {meaning}")],
+                k.to_string(),
+                "{name}"
+            );
+        }
+    }
+    // each frame's tools, its part 1: triangles, a code per triangle naming its tool
+    for k in 0..3 {
+        let name = format!("forming_{k:04}_tools.vtu");
+        let tools = &read.grids[&name];
+        assert!(tools.cells > 1000, "{name}: {tools:?}");
+        let codes: BTreeMap<String, String> = [("cell tool".to_string(), "-".to_string())]
+            .into_iter()
+            .collect();
+        assert_cells(&name, tools, (tools.points, tools.cells), "5", &codes);
+        for (k, tool) in ["punch", "die", "blank holder"].iter().enumerate() {
+            assert_eq!(tools.fields[&format!("tool {k} {tool}")], k.to_string());
+        }
     }
 
     // quadrilaterals: 16 x 16 cells of VTK type 9 on the same 17 x 17 nodes, the same arrays
@@ -295,4 +313,103 @@ fn every_paraview_file_reads_in_vtk_as_written() {
     assert!(net.cells > 50, "{net:?}");
     assert!(net.points < 2 * net.cells, "{net:?}");
     assert!(2 * net.shared_points > net.points, "{net:?}");
+
+    same_in_meshio_and_pyvista(&dir, &read, &[&run, &bias, &drape], &quad_blank);
+    csv_times_are_the_frames(&run, &read.times["forming.pvd"]);
+}
+
+/// Every `.vtu` VTK read above, read again by meshio and by pyvista: the same points, cells and
+/// arrays; the forming `.pvd` through pyvista, its sheet and tools as two blocks at each time;
+/// the sheets' points flat (the reference blank), the formed blanks' lifted onto the punch by
+/// `displacement`.
+fn same_in_meshio_and_pyvista(dir: &Path, vtk: &Read, folders: &[&Path], quad_blank: &Path) {
+    let found = Command::new("python3")
+        .arg(repo_path("tests/read_meshio_pyvista.py"))
+        .output()
+        .is_ok_and(|o| o.status.success());
+    let missing = "meshio and pyvista (pip install meshio pyvista)";
+    if !common::reader_available(found, "paraview_files", missing) {
+        return;
+    }
+    let mut files = vec![folders[0].join("forming.pvd"), quad_blank.to_path_buf()];
+    for folder in folders {
+        for entry in std::fs::read_dir(folder).unwrap() {
+            let path = entry.unwrap().path();
+            if path.extension().is_some_and(|e| e == "vtu") {
+                files.push(path);
+            }
+        }
+    }
+    let out = Command::new("python3")
+        .arg(repo_path("tests/read_meshio_pyvista.py"))
+        .args(&files)
+        .current_dir(dir)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "meshio or pyvista could not read the files: {}\n{stdout}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let (mut checked, mut times, mut rising) = (0, 0, 0);
+    for line in stdout.lines() {
+        let words: Vec<&str> = line.split(' ').collect();
+        match words[0] {
+            "meshio" | "pyvista" => {
+                let grid = &vtk.grids[words[1]];
+                let counts = (words[3].parse().unwrap(), words[5].parse().unwrap());
+                assert_eq!(counts, (grid.points, grid.cells), "{line}");
+                for (kind, list) in [("point", words[7]), ("cell", words[9])] {
+                    let theirs: Vec<String> = list
+                        .split(',')
+                        .filter(|n| *n != "-")
+                        .map(|n| format!("{kind} {n}"))
+                        .collect();
+                    let ours: Vec<&String> =
+                        grid.arrays.keys().filter(|k| k.starts_with(kind)).collect();
+                    assert_eq!(theirs.iter().collect::<Vec<_>>(), ours, "{line}");
+                }
+                checked += 1;
+            }
+            "z" => {
+                let z: Vec<f64> = [3, 4, 6, 7].map(|k| words[k].parse().unwrap()).to_vec();
+                assert!(z[0].abs() < 1e-12 && z[1].abs() < 1e-12, "{line}");
+                if words[1].contains("formed-blank") {
+                    assert!(z[3] > 1.0, "{line}");
+                    rising += 1;
+                }
+            }
+            "pvd" => {
+                assert_eq!(words[5], "2", "{line}: the sheet and the tools");
+                assert_eq!(words[7].split(',').next(), Some("289"), "{line}");
+                times += 1;
+            }
+            other => panic!("unexpected reader line '{other}': {line}"),
+        }
+    }
+    assert_eq!((times, rising), (3, 2), "{stdout}");
+    assert_eq!(checked, 2 * (files.len() - 1), "{stdout}");
+}
+
+/// The CSV history's `time` is process time, as the frames': its last row is the last frame's
+/// time, and ten times its `solver_time` (the run's time scaling).
+fn csv_times_are_the_frames(run: &Path, frame_times: &[f64]) {
+    let csv = std::fs::read_to_string(run.join("forming.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let last: Vec<f64> = lines
+        .last()
+        .unwrap()
+        .split(',')
+        .map(|v| v.parse().unwrap())
+        .collect();
+    let column = |name: &str| last[header.iter().position(|h| *h == name).unwrap()];
+    let (time, solver_time) = (column("time"), column("solver_time"));
+    assert!(
+        (time - 10.0 * solver_time).abs() < 1e-9 * time,
+        "{time} {solver_time}"
+    );
+    let frame = frame_times[frame_times.len() - 1];
+    assert!((time - frame).abs() < 1e-9 * time, "{time} {frame}");
 }

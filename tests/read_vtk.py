@@ -2,8 +2,8 @@
 
 Usage: python3 read_vtk.py FILE...   (.vtu or .pvd)
 
-For a .pvd: one line `pvd FILE times T0 T1 ...`, then each data set it lists, read by
-vtkXMLUnstructuredGridReader. For each .vtu:
+For a .pvd: one line `pvd FILE times T0 T1 ...` (each time once, whatever the parts listed
+under it), then each data set it lists, read by vtkXMLUnstructuredGridReader. For each .vtu:
 
     vtu FILE points N cells M types T1,T2 shared_points S
     point|cell NAME components K names C0,C1 nan COUNT
@@ -87,7 +87,8 @@ def read_vtu(path, errors):
 def read_pvd(path, errors):
     root = ET.parse(path).getroot()
     sets = root.find("Collection").findall("DataSet")
-    print(f"pvd {path.name} times {' '.join(s.get('timestep') for s in sets)}")
+    times = list(dict.fromkeys(s.get("timestep") for s in sets))
+    print(f"pvd {path.name} times {' '.join(times)}")
     for s in sets:
         read_vtu(path.parent / s.get("file"), errors)
 

@@ -68,7 +68,10 @@ fn forming(args: &Args) -> anyhow::Result<()> {
     let _lock = take_output_folder(&dir, &products())?;
     let csv = dir.join(CSV);
     let output = LiveOutput {
-        history: Some(history(CsvStream::create(&csv, &COLUMNS)?)),
+        history: Some(history(
+            CsvStream::create(&csv, &COLUMNS)?,
+            scenario.process.time_scaling,
+        )),
         frames: match scenario.output.frames {
             0 => None,
             n => Some(FrameOutput::new(
@@ -128,7 +131,9 @@ fn forming(args: &Args) -> anyhow::Result<()> {
     result.outcome.map(|_| ()).map_err(anyhow::Error::from)
 }
 
-const COLUMNS: [&str; 18] = [
+/// `time` is process time, the solver's `solver_time` times `process.time_scaling`, as the
+/// frames' times are.
+const COLUMNS: [&str; 19] = [
     "time",
     "stroke",
     "punch_force",
@@ -147,12 +152,13 @@ const COLUMNS: [&str; 18] = [
     "tool_work",
     "external_work",
     "energy_balance_error",
+    "solver_time",
 ];
 
-fn row(r: &FormingRecord) -> [f64; 18] {
+fn row(r: &FormingRecord, time_scaling: f64) -> [f64; 19] {
     let e = &r.energies;
     [
-        r.time,
+        r.time * time_scaling,
         r.stroke,
         r.punch_force,
         r.holder_force,
@@ -170,6 +176,7 @@ fn row(r: &FormingRecord) -> [f64; 18] {
         e.tool_work,
         e.external_work,
         e.balance_error(),
+        r.time,
     ]
 }
 
@@ -193,10 +200,10 @@ fn products() -> ProductFiles {
 }
 
 /// The CSV history, a row written as each record is taken.
-fn history<'a>(mut csv: CsvStream) -> HistorySink<'a, FormingRecord> {
+fn history<'a>(mut csv: CsvStream, time_scaling: f64) -> HistorySink<'a, FormingRecord> {
     Box::new(move |records: &[FormingRecord]| {
         if let Some(newest) = records.last() {
-            csv.write_row(&row(newest))?;
+            csv.write_row(&row(newest, time_scaling))?;
         }
         Ok(())
     })

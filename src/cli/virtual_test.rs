@@ -376,7 +376,7 @@ fn sheet_test<T: SheetTest>(
     let shape = (test.settings().end_time, p.time_scaling);
     let history = |mut csv: CsvStream| -> HistorySink<'_, Record> {
         Box::new(move |records: &[Record]| {
-            if let Some(row) = newest_row(test, report, records) {
+            if let Some(row) = newest_row(test, report, records, shape.1) {
                 csv.write_row(&row)?;
             }
             Ok(())
@@ -456,12 +456,13 @@ fn newest_row<T: SheetTest>(
     test: &T,
     report: fn(&[T::Row]) -> TestReport,
     records: &[Record],
+    time_scaling: f64,
 ) -> Option<Vec<f64>> {
     let rows = test.rows(records);
     let own = *report(rows.get(rows.len().checked_sub(1)?..)?)
         .rows
         .first()?;
-    Some(history_row(records.last()?, &own))
+    Some(history_row(records.last()?, &own, time_scaling))
 }
 
 /// What [`run_and_report`] opens before the run, for the test to write as it goes.
@@ -504,6 +505,7 @@ fn run_and_report(
         .into_iter()
         .chain(columns)
         .chain(ENERGY_COLUMNS)
+        .chain(["solver_time"])
         .collect();
     let output = OpenOutput {
         csv: Some(CsvStream::create(&csv, &header)?),
@@ -584,9 +586,10 @@ const ENERGY_COLUMNS: [&str; 7] = [
     "energy_balance_error",
 ];
 
-/// One CSV row: time, displacement and force of the record, the test's own cells, and the
-/// energies.
-fn history_row(record: &Record, own: &[f64; 3]) -> Vec<f64> {
+/// One CSV row: time, displacement and force of the record, the test's own cells, the
+/// energies and the solver's time. `time` is process time, the solver's times `time_scaling`,
+/// as the frames' times are.
+fn history_row(record: &Record, own: &[f64; 3], time_scaling: f64) -> Vec<f64> {
     let e = &record.energies;
     let r = &record.reading;
     let energies = [
@@ -598,10 +601,11 @@ fn history_row(record: &Record, own: &[f64; 3]) -> Vec<f64> {
         e.external_work,
         e.balance_error(),
     ];
-    [record.time, r.displacement, r.force]
+    [record.time * time_scaling, r.displacement, r.force]
         .into_iter()
         .chain(own.iter().copied())
         .chain(energies)
+        .chain([record.time])
         .collect()
 }
 

@@ -2,6 +2,7 @@
 //! and shear angle while the solver runs, ParaView frames, and the run summary.
 
 use crate::io::sheet_frame::sheet_frame;
+use crate::io::tool_frame::tool_frame;
 use crate::io::vtk::{PvdSeries, VtuFrame};
 use crate::material::Laminate;
 use crate::mesh::{rectangle, DiagonalPattern};
@@ -457,7 +458,8 @@ impl Observer for Recorder<'_, '_, '_> {
     }
 }
 
-/// Writes one ParaView frame of the sheet at `state` to `series`, at `time` (s).
+/// Writes one ParaView frame of the sheet at `state` to `series`, at `time` (s), with the
+/// tools' surfaces as its second part where the model has tools.
 pub fn write_frame(
     series: &mut PvdSeries,
     model: &Model,
@@ -465,17 +467,33 @@ pub fn write_frame(
     time: f64,
 ) -> anyhow::Result<()> {
     let frame = sheet_frame(model, state)?;
-    series.add_frame(
-        time,
-        &VtuFrame {
-            points: &frame.points,
-            cells: &model.mesh.cells,
-            point_data: &frame.point_data,
-            cell_data: &frame.cell_data,
-        },
-    )?;
+    let sheet = VtuFrame {
+        points: &frame.points,
+        cells: &model.mesh.cells,
+        point_data: &frame.point_data,
+        cell_data: &frame.cell_data,
+    };
+    match tool_frame(model, state) {
+        None => series.add_frame(time, &sheet)?,
+        Some(tools) => series.add_frame_with_parts(
+            time,
+            &sheet,
+            &[(
+                TOOLS_PART,
+                VtuFrame {
+                    points: &tools.points,
+                    cells: &tools.cells,
+                    point_data: &[],
+                    cell_data: &tools.cell_data,
+                },
+            )],
+        )?,
+    };
     Ok(())
 }
+
+/// The name of a frame's tools part: `<series>_NNNN_tools.vtu`.
+pub const TOOLS_PART: &str = "tools";
 
 /// Runs `model` and records `measure` at every output interval; records after `settle_time`
 /// count for the energy figures of the summary.

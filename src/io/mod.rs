@@ -5,6 +5,7 @@ pub mod output_folder;
 pub mod plot;
 pub mod product_file;
 pub mod sheet_frame;
+pub mod tool_frame;
 pub mod vtk;
 pub mod xy_curve;
 

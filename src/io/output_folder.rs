@@ -38,7 +38,8 @@ impl ProductFiles {
     }
 }
 
-/// `<series>.pvd` or `<series>_` digits `.vtu`.
+/// `<series>.pvd`, `<series>_` digits `.vtu` or a further part of a frame, `<series>_` digits
+/// `_<part>.vtu` (`io::vtk::PvdSeries`).
 fn is_series_file(name: &str, series: &str) -> bool {
     let Some(rest) = name.strip_prefix(series) else {
         return false;
@@ -46,9 +47,12 @@ fn is_series_file(name: &str, series: &str) -> bool {
     if rest == ".pvd" {
         return true;
     }
-    rest.strip_prefix('_')
-        .and_then(|r| r.strip_suffix(".vtu"))
-        .is_some_and(|digits| !digits.is_empty() && digits.bytes().all(|b| b.is_ascii_digit()))
+    let Some(frame) = rest.strip_prefix('_').and_then(|r| r.strip_suffix(".vtu")) else {
+        return false;
+    };
+    let (digits, part) = frame.split_once('_').unwrap_or((frame, "a"));
+    let word = |s: &str| !s.is_empty() && s.bytes().all(|b| b.is_ascii_alphanumeric() || b == b'-');
+    !digits.is_empty() && digits.bytes().all(|b| b.is_ascii_digit()) && word(part)
 }
 
 /// Who holds a folder that could not be taken.
@@ -367,6 +371,7 @@ mod tests {
             "forming.pvd",
             "forming_0000.vtu",
             "forming_12345.vtu.tmp",
+            "forming_0003_tools.vtu",
             "formed-blank.inp",
         ] {
             assert!(p.matches(name), "{name}");
@@ -376,6 +381,8 @@ mod tests {
             "forming_.vtu",
             "forming_00a1.vtu",
             "forming_0001.vtu.bak",
+            "forming_0001_.vtu",
+            "forming_0001_my notes.vtu",
             "my-forming.csv",
             "notes.txt",
             LOCK_FILE,

@@ -9,7 +9,10 @@ use crate::solver::{Model, State};
 use nalgebra::{Matrix2, Matrix3, Vector3};
 use std::sync::Arc;
 
-/// Points, triangles and fields of one frame, owned.
+/// Points, triangles and fields of one frame, owned. The points are the sheet's reference
+/// (flat) positions and `displacement` takes them to where the sheet is: ParaView's Warp By
+/// Vector with `displacement` at scale 1 shows the part as formed, the convention of finite
+/// element results (docs/forming.md, "ParaView output").
 pub struct SheetFrame {
     pub points: Vec<[f64; 3]>,
     pub point_data: Vec<Field>,
@@ -30,13 +33,14 @@ fn in_plane(t: &Matrix3<f64>) -> [f64; 3] {
 /// meanings are in the file as `contact_status_codes`) and the gap of the blank's faces to
 /// each tool (mm, `gap_<tool>`). Cell data: shear angle (degrees), current warp and weft
 /// directions, thickness, membrane forces `membrane_force` (xx, yy, xy in the reference x–y
-/// axes, N/mm) and the 2nd Piola–Kirchhoff stress of each material of the stack
+/// axes, N/mm), the yarn tensions `yarn_tension_warp` and `yarn_tension_weft` (N per mm of
+/// reference width, docs/model.md §4) and the 2nd Piola–Kirchhoff stress of each material of the stack
 /// (`stress_matrix`, `stress_fabric`: xx, yy, xy, MPa), whatever the card's stack. A blank of
 /// several plies adds the ply of each cell (`ply`, numbered from 1 in the model's order) and,
 /// where its plies touch, the pressure of the neighbouring plies on each node
 /// (`interply_pressure`, MPa) and how far it has slid over them (`interply_slip`, mm).
 pub fn sheet_frame(model: &Model, state: &State) -> Result<SheetFrame, MaterialError> {
-    let points = state.positions.iter().map(vector).collect();
+    let points = model.mesh.nodes.iter().map(vector).collect();
     let displacement = state
         .positions
         .iter()
@@ -70,6 +74,7 @@ pub fn sheet_frame(model: &Model, state: &State) -> Result<SheetFrame, MaterialE
     let mut warp = Vec::with_capacity(model.elements.len());
     let mut weft = Vec::with_capacity(model.elements.len());
     let mut membrane = Vec::with_capacity(model.elements.len());
+    let mut yarn_tensions = Vec::with_capacity(model.elements.len());
     let mut layers = vec![Vec::with_capacity(model.elements.len()); n_layers];
     for (k, e) in model.elements.iter().enumerate() {
         let f = e.gradient(&state.positions);
@@ -82,6 +87,11 @@ pub fn sheet_frame(model: &Model, state: &State) -> Result<SheetFrame, MaterialE
         warp.push(yarn(&e.fibres.warp));
         weft.push(yarn(&e.fibres.weft));
         membrane.push(in_plane(&e.to_global(&state.membrane[k].n)));
+        yarn_tensions.push(
+            model
+                .laminate(k)
+                .yarn_tensions(&kin, &state.laminate_states[k])?,
+        );
         for (layer, out) in layers.iter_mut().enumerate() {
             let s = model
                 .laminate(k)
@@ -110,6 +120,14 @@ pub fn sheet_frame(model: &Model, state: &State) -> Result<SheetFrame, MaterialE
         Field {
             name: "membrane_force".into(),
             data: FieldData::InPlaneTensor(membrane),
+        },
+        Field {
+            name: "yarn_tension_warp".into(),
+            data: FieldData::Scalar(yarn_tensions.iter().map(|t| t[0]).collect()),
+        },
+        Field {
+            name: "yarn_tension_weft".into(),
+            data: FieldData::Scalar(yarn_tensions.iter().map(|t| t[1]).collect()),
         },
     ];
     for (values, name) in layers

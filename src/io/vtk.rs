@@ -164,13 +164,17 @@ pub fn write_vtu(path: &Path, frame: &VtuFrame) -> Result<(), VtkError> {
 }
 
 /// A time series: frames `<dir>/<basename>_0000.vtu, _0001.vtu, ...` and `<dir>/<basename>.pvd`,
-/// which ParaView opens as one animated data set.
+/// which ParaView opens as one animated data set. A frame may have further parts beside the
+/// sheet (the tools), each its own file `<basename>_0000_<part>.vtu` listed under the same time
+/// as part 1, 2, ... of the collection: ParaView and pyvista read such a time as one
+/// multiblock data set, the sheet block 0.
 #[derive(Clone, Debug)]
 pub struct PvdSeries {
     dir: PathBuf,
     basename: String,
-    /// Time and file name (relative to `dir`) of each frame written so far.
-    frames: Vec<(f64, String)>,
+    /// Time (as written, [`time_text`]) and file names (relative to `dir`, part 0 first) of
+    /// each frame written so far.
+    frames: Vec<(f64, Vec<String>)>,
 }
 
 impl PvdSeries {
@@ -194,14 +198,32 @@ impl PvdSeries {
 
     /// Writes the frame and rewrites the `.pvd` at once, so that the files on disk are a valid
     /// collection of the results so far even if the run stops later. Returns the frame's path.
-    /// Times must be finite and increasing. Should the `.pvd` fail to be written, the frame
-    /// still counts: the next successful call lists it.
+    /// Times must be finite and increasing, as written (ten significant digits). Should the
+    /// `.pvd` fail to be written, the frame still counts: the next successful call lists it.
     pub fn add_frame(&mut self, time: f64, frame: &VtuFrame) -> Result<PathBuf, VtkError> {
-        self.check_time(time)?;
-        let name = format!("{}_{:04}.vtu", self.basename, self.frames.len());
+        self.add_frame_with_parts(time, frame, &[])
+    }
+
+    /// [`PvdSeries::add_frame`] with further `parts` of the same time, each `(name, frame)`,
+    /// `name` a word (letters, digits, `-`) that ends its file's name.
+    pub fn add_frame_with_parts(
+        &mut self,
+        time: f64,
+        frame: &VtuFrame,
+        parts: &[(&str, VtuFrame)],
+    ) -> Result<PathBuf, VtkError> {
+        let time = self.checked_time(time)?;
+        let stem = format!("{}_{:04}", self.basename, self.frames.len());
+        let name = format!("{stem}.vtu");
         let path = self.dir.join(&name);
         write_vtu(&path, frame)?;
-        self.frames.push((time, name));
+        let mut files = vec![name];
+        for (part, frame) in parts {
+            let name = format!("{stem}_{part}.vtu");
+            write_vtu(&self.dir.join(&name), frame)?;
+            files.push(name);
+        }
+        self.frames.push((time, files));
         self.write_pvd()?;
         Ok(path)
     }
@@ -214,15 +236,17 @@ impl PvdSeries {
         self.frames.len()
     }
 
-    fn check_time(&self, time: f64) -> Result<(), VtkError> {
+    /// `time` as it will be written, if finite and after the last frame's.
+    fn checked_time(&self, time: f64) -> Result<f64, VtkError> {
         if !time.is_finite() {
             return Err(VtkError::NonFiniteTime { time });
         }
+        let written = rounded_time(time);
         match self.frames.last() {
-            Some(&(previous, _)) if time <= previous => {
+            Some(&(previous, _)) if written <= previous => {
                 Err(VtkError::TimeNotIncreasing { time, previous })
             }
-            _ => Ok(()),
+            _ => Ok(written),
         }
     }
 
@@ -231,20 +255,38 @@ impl PvdSeries {
     }
 }
 
-/// The `.pvd` text listing `frames` (time, relative file name).
-fn pvd_document(frames: &[(f64, String)]) -> String {
+/// Significant digits of the times written: a frame's time is a record's, itself a sum of
+/// increments, whose last digits are noise (`0.6150000000000001`).
+const TIME_DIGITS: usize = 10;
+
+/// `time` rounded to [`TIME_DIGITS`] significant digits.
+fn rounded_time(time: f64) -> f64 {
+    format!("{time:.*e}", TIME_DIGITS - 1)
+        .parse()
+        .unwrap_or(time)
+}
+
+/// `time` as written in a `.pvd`: [`rounded_time`] in its shortest decimal form (`0.615`).
+pub fn time_text(time: f64) -> String {
+    format!("{}", rounded_time(time))
+}
+
+/// The `.pvd` text listing `frames` (time, relative file names, part 0 first).
+fn pvd_document(frames: &[(f64, Vec<String>)]) -> String {
     let mut out = String::from(
         "<?xml version=\"1.0\"?>\n\
          <VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n\
          <Collection>\n",
     );
-    for (time, file) in frames {
-        // `{:e}` is the shortest text that reads back as the same f64.
-        let _ = writeln!(
-            out,
-            "<DataSet timestep=\"{time:e}\" part=\"0\" file=\"{}\"/>",
-            xml_escape(file)
-        );
+    for (time, files) in frames {
+        for (part, file) in files.iter().enumerate() {
+            let _ = writeln!(
+                out,
+                "<DataSet timestep=\"{}\" part=\"{part}\" file=\"{}\"/>",
+                time_text(*time),
+                xml_escape(file)
+            );
+        }
     }
     out.push_str("</Collection>\n</VTKFile>\n");
     out
@@ -417,8 +459,10 @@ fn push_fields(out: &mut String, section: &str, fields: &[Field]) {
     let _ = writeln!(out, "</{section}>");
 }
 
-/// The meanings of every code field, as the grid's field data: one string array
-/// `<name>_codes` ("0 free", "1 punch", ...) per field of codes.
+/// The meanings of every code field, as the grid's field data: for each code `k` of a field
+/// `name`, a one-value `Int32` array named `name k meaning` ("contact_status 1 punch") holding
+/// `k`. Numbers, not strings: meshio refuses VTK's `String` arrays, and ParaView lists field
+/// data by name in its Information panel, where the legend then reads as it should.
 fn push_code_meanings<'f>(out: &mut String, fields: impl Iterator<Item = &'f Field>) {
     let legends: Vec<(&str, &[String])> = fields
         .filter_map(|f| match &f.data {
@@ -431,22 +475,21 @@ fn push_code_meanings<'f>(out: &mut String, fields: impl Iterator<Item = &'f Fie
     }
     out.push_str("<FieldData>\n");
     for (name, meanings) in legends {
-        // VTK's ASCII form of a string array: each string's bytes, then a 0
-        let mut codes = Vec::new();
         for (k, meaning) in meanings.iter().enumerate() {
-            codes.extend(format!("{k} {meaning}").bytes().map(|b| b.to_string()));
-            codes.push("0".to_string());
+            let _ = writeln!(
+                out,
+                "<DataArray type=\"Int32\" Name=\"{}\" NumberOfTuples=\"1\" \
+                 format=\"ascii\">{k}</DataArray>",
+                xml_escape(&code_name(name, k, meaning))
+            );
         }
-        let _ = writeln!(
-            out,
-            "<DataArray type=\"String\" Name=\"{}_codes\" NumberOfTuples=\"{}\" \
-             format=\"ascii\">\n{}\n</DataArray>",
-            xml_escape(name),
-            meanings.len(),
-            codes.join(" ")
-        );
     }
     out.push_str("</FieldData>\n");
+}
+
+/// The name of the field-data array that says what code `k` of field `name` means.
+pub fn code_name(name: &str, k: usize, meaning: &str) -> String {
+    format!("{name} {k} {meaning}")
 }
 
 /// One inline binary `DataArray` (with its components' names, if any): base64 of the byte
@@ -560,11 +603,36 @@ mod tests {
              ComponentName1=\"y\" ComponentName2=\"z\""
         ));
         assert!(text.contains("<DataArray type=\"Int32\" Name=\"status\""));
-        // "0 free", "1 punch", each ended by a 0, as VTK writes string arrays in ASCII
-        assert!(text.contains(
-            "Name=\"status_codes\" NumberOfTuples=\"2\" format=\"ascii\">\n\
-             48 32 102 114 101 101 0 49 32 112 117 110 99 104 0\n"
-        ));
+        // one number a meaning, named by the field, the code and what it means
+        for (k, meaning) in ["free", "punch"].iter().enumerate() {
+            assert!(text.contains(&format!(
+                "<DataArray type=\"Int32\" Name=\"status {k} {meaning}\" NumberOfTuples=\"1\" \
+                 format=\"ascii\">{k}</DataArray>"
+            )));
+        }
+    }
+
+    #[test]
+    fn times_are_written_to_ten_digits_and_must_increase_as_written() {
+        assert_eq!(time_text(0.6150000000000001), "0.615");
+        assert_eq!(time_text(0.0), "0");
+        assert_eq!(time_text(1.0 / 3.0), "0.3333333333");
+        let dir = std::env::temp_dir().join(format!("thermostamp-pvd-{}", std::process::id()));
+        let mut series = PvdSeries::new(&dir, "s").unwrap();
+        let frame = VtuFrame {
+            points: &[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+            cells: &[Cell::Triangle([0, 1, 2])],
+            point_data: &[],
+            cell_data: &[],
+        };
+        series
+            .add_frame_with_parts(0.1, &frame, &[("tools", frame)])
+            .unwrap();
+        assert!(series.add_frame(0.1 + 1e-13, &frame).is_err());
+        let pvd = std::fs::read_to_string(series.pvd_path()).unwrap();
+        assert!(pvd.contains("timestep=\"0.1\" part=\"0\" file=\"s_0000.vtu\""));
+        assert!(pvd.contains("timestep=\"0.1\" part=\"1\" file=\"s_0000_tools.vtu\""));
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

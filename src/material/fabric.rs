@@ -270,6 +270,17 @@ impl MaterialLaw for WovenFabric {
         ThicknessRule::VolumeConserving
     }
 
+    /// docs/model.md §3: each family's `dW_t/dlambda` at its stretch `lambda = sqrt(I4)`,
+    /// `sqrt(I6)`; the shear term is not a yarn tension and is left out.
+    fn yarn_tensions(&self, point: &PointKinematics) -> Result<Option<[f64; 2]>, MaterialError> {
+        ensure_finite(self.name(), point)?;
+        let inv = FibreInvariants::of(&point.c, &point.fibres)?;
+        Ok(Some([
+            self.warp.tension(inv.i4.sqrt()),
+            self.weft.tension(inv.i6.sqrt()),
+        ]))
+    }
+
     /// docs/model.md §3: `S = 2 W4 a0(x)a0 + 2 W6 b0(x)b0 + W8 (a0(x)b0 + b0(x)a0)`.
     fn second_piola_kirchhoff(
         &self,

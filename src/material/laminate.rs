@@ -552,6 +552,26 @@ impl Laminate {
     }
 
     /// 3D stress `S` of layer `k` for the kinematics and a state already advanced to them.
+    /// The yarn tensions of the sheet, warp and weft (N/mm: force per unit reference width
+    /// across the yarns), the sum over the layers with yarns of their reference thickness times
+    /// [`MaterialLaw::yarn_tensions`] (docs/model.md §4).
+    pub fn yarn_tensions(
+        &self,
+        kin: &MembraneKinematics,
+        state: &LaminateState,
+    ) -> Result<[f64; 2], MaterialError> {
+        let mut sum = [0.0; 2];
+        for (k, layer) in self.layers.iter().enumerate() {
+            let point =
+                kin.layer_point(state.thickness_stretch[k], state.thickness_stretch_rate[k]);
+            if let Some(t) = layer.law.yarn_tensions(&point)? {
+                sum[0] += layer.thickness * t[0];
+                sum[1] += layer.thickness * t[1];
+            }
+        }
+        Ok(sum)
+    }
+
     pub fn layer_stress(
         &self,
         k: usize,

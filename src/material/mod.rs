@@ -147,6 +147,13 @@ pub trait MaterialLaw: Debug + Send + Sync {
         Ok(false)
     }
 
+    /// The tensions of the two yarn families, warp and weft (MPa, force per unit reference
+    /// cross-section of the layer: `dW_t/dlambda` of each, docs/model.md §3); `None` for a law
+    /// without yarns.
+    fn yarn_tensions(&self, _point: &PointKinematics) -> Result<Option<[f64; 2]>, MaterialError> {
+        Ok(None)
+    }
+
     /// Stored (hyperelastic) energy per unit reference volume (MPa); `S_e = 2 dW/dC`.
     fn strain_energy(&self, point: &PointKinematics) -> Result<f64, MaterialError>;
 
