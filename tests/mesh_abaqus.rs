@@ -153,8 +153,12 @@ fn rectangles_of_every_pattern_round_trip_with_the_mesh_warp_directions() {
 fn rectangles_of_every_pattern_round_trip_with_warp_and_thickness_of_a_formed_blank() {
     for pattern in patterns() {
         let mesh = awkward_rectangle(pattern);
+        // a weft 60° from the warp (a fabric sheared by 30°): the deck keeps it as the
+        // orientations' second points, the warp as their 1-axes, which the reader reads back
+        let turn = nalgebra::Rotation3::from_axis_angle(&Vector3::z_axis(), 60_f64.to_radians());
         let output = ElementOutput {
             warp: warp(&mesh),
+            weft: Some(warp(&mesh).iter().map(|w| turn * w).collect()),
             thickness: (0..mesh.cells.len())
                 .map(|t| 0.31 * (1.0 + 0.01 * (t as f64).sin()))
                 .collect(),
@@ -174,6 +178,7 @@ fn round_trip_through_files_on_disk() {
     let mesh = awkward_rectangle(DiagonalPattern::Crossed);
     let output = ElementOutput {
         warp: warp(&mesh),
+        weft: None,
         thickness: vec![0.29; mesh.cells.len()],
     };
     write_inp(&path, &mesh, Some(&output)).unwrap();
@@ -197,6 +202,7 @@ fn the_writer_refuses_what_abaqus_cannot_hold() {
         &mesh,
         Some(&ElementOutput {
             warp: vec![Vector3::x(); n],
+            weft: None,
             thickness: vec![0.3; n - 1],
         }),
     );
@@ -208,10 +214,32 @@ fn the_writer_refuses_what_abaqus_cannot_hold() {
         &mesh,
         Some(&ElementOutput {
             warp: vec![Vector3::z(); n],
+            weft: None,
             thickness: vec![0.3; n],
         }),
     );
     assert!(e.contains("normal to the element"), "{e}");
+    let e = bad(
+        &mesh,
+        Some(&ElementOutput {
+            warp: vec![Vector3::x(); n],
+            weft: Some(vec![Vector3::new(1.0, 1e-4, 0.0); n]),
+            thickness: vec![0.3; n],
+        }),
+    );
+    assert!(
+        e.contains("element 0: weft direction") && e.contains("along the warp"),
+        "{e}"
+    );
+    let e = bad(
+        &mesh,
+        Some(&ElementOutput {
+            warp: vec![Vector3::x(); n],
+            weft: Some(vec![Vector3::y(); n - 1]),
+            thickness: vec![0.3; n],
+        }),
+    );
+    assert!(e.contains("weft directions"), "{e}");
     mesh.node_sets.insert("TOP".to_string(), vec![0]);
     let e = bad(&mesh, None);
     assert!(e.contains("differ only in case"), "{e}");
@@ -350,6 +378,7 @@ fn triangles_and_quadrilaterals_in_one_mesh_round_trip_in_their_order() {
     mesh.validate().unwrap();
     let output = ElementOutput {
         warp: warp(&mesh),
+        weft: None,
         thickness: (0..mesh.cells.len())
             .map(|t| 0.3 + 0.001 * t as f64)
             .collect(),
@@ -891,6 +920,7 @@ fn valid_deck() -> String {
     let mesh = rectangle(20.0, 10.0, 2, 2, DiagonalPattern::Alternating);
     let output = ElementOutput {
         warp: warp(&mesh),
+        weft: None,
         thickness: vec![0.3; mesh.cells.len()],
     };
     format!(
@@ -965,6 +995,7 @@ proptest! {
         prop_assume!(mesh.validate().is_ok());
         let output = ElementOutput {
             warp: warp.chunks(3).take(cells).map(Vector3::from_column_slice).collect(),
+            weft: None,
             thickness: thickness.iter().take(cells).map(|t| t.abs()).collect(),
         };
         let mut bytes = Vec::new();

@@ -1,5 +1,5 @@
 //! A mesh as an Abaqus deck that CalculiX reads as well: nodes, S3 and S4R elements, sets, and per
-//! element the warp direction (an orientation) and the thickness (a shell section).
+//! element the warp and weft directions (an orientation) and the thickness (a shell section).
 
 use crate::mesh::{Mesh, MeshFileError};
 use nalgebra::Vector3;
@@ -9,11 +9,15 @@ use std::io::Write;
 use std::path::Path;
 
 /// Per element, what a forming run gives a structural analysis: the current warp direction
-/// (any length; written as the local 1-axis of the element's material orientation) and the
-/// current thickness (mm).
+/// (any length; written as the local 1-axis of the element's material orientation), the
+/// current weft direction (written as the orientation's second point, which fixes the 1–2
+/// plane: Abaqus and CalculiX take the local 2-axis normal to the warp in the plane of the
+/// two, so the weft is kept in the deck exactly; `None`: the 2-axis normal to the warp in the
+/// element) and the current thickness (mm).
 #[derive(Clone, Debug, PartialEq)]
 pub struct ElementOutput {
     pub warp: Vec<Vector3<f64>>,
+    pub weft: Option<Vec<Vector3<f64>>>,
     pub thickness: Vec<f64>,
 }
 
@@ -117,10 +121,13 @@ pub fn write_inp_to<W: Write>(
         None => mesh.warp_directions.as_deref(),
     };
     let thickness: Option<&[f64]> = elements.map(|e| e.thickness.as_slice());
+    let weft: Option<&[Vector3<f64>]> = elements.and_then(|e| e.weft.as_deref());
     if let Some(e) = elements {
-        if e.warp.len() != count || e.thickness.len() != count {
+        let wefts = e.weft.as_ref().map_or(count, Vec::len);
+        if e.warp.len() != count || e.thickness.len() != count || wefts != count {
             return Err(error(format!(
-                "{} warp directions and {} thicknesses for {count} elements",
+                "{} warp directions, {wefts} weft directions and {} thicknesses for {count} \
+                 elements",
                 e.warp.len(),
                 e.thickness.len()
             )));
@@ -193,25 +200,30 @@ pub fn write_inp_to<W: Write>(
         write_labels(&mut text, members);
     }
     if with_sections {
-        write_sections(&mut text, mesh, warp, thickness).map_err(error)?;
+        write_sections(&mut text, mesh, (warp, weft), thickness).map_err(error)?;
     }
     out.write_all(text.as_bytes())
         .map_err(|e| error(format!("cannot write: {e}")))
 }
 
-/// Per element: its element set, its orientation (where there is a warp) and its shell
-/// section (with its thickness where known).
+/// Per element: its element set, its orientation (where there is a warp; its second point
+/// the weft where known) and its shell section (with its thickness where known).
 fn write_sections(
     text: &mut String,
     mesh: &Mesh,
-    warp: Option<&[Vector3<f64>]>,
+    (warp, weft): (Option<&[Vector3<f64>]>, Option<&[Vector3<f64>]>),
     thickness: Option<&[f64]>,
 ) -> Result<(), String> {
+    let b_is = if weft.is_some() {
+        "the weft: the local 2-axis is normal to a in the plane of a and b, and the \
+         shear angle\n** of the fabric is 90 degrees less the angle between a and b"
+    } else {
+        "in the element, normal to a"
+    };
     let _ = writeln!(
         text,
-        "** Per element: its own element set, its orientation (local 1-axis a: the warp; b in \
-         the element,\n** normal to a) and its shell section (its thickness in mm, 5 \
-         integration points)."
+        "** Per element: its own element set, its orientation (local 1-axis a: the warp; b \
+         {b_is}) and its shell section (its thickness in mm, 5 integration points)."
     );
     if thickness.is_none() {
         let _ = writeln!(
@@ -236,6 +248,10 @@ fn write_sections(
                      the element"
                 ));
             }
+            let b = match weft.map(|w| w[t]) {
+                Some(w) => second_axis_point(t, &a, &w)?,
+                None => b,
+            };
             let _ = writeln!(
                 text,
                 "*ORIENTATION, NAME={ORIENTATION_PREFIX}{label}\n{}\n3, 0.0",
@@ -247,6 +263,19 @@ fn write_sections(
         let _ = writeln!(text, "{section}\n{h}, 5");
     }
     Ok(())
+}
+
+/// The weft `w` as an orientation's second point: unit, and far enough from the warp `a` that
+/// the plane of the two is defined (yarns within a degree of each other are no fabric).
+fn second_axis_point(t: usize, a: &Vector3<f64>, w: &Vector3<f64>) -> Result<Vector3<f64>, String> {
+    let unit = w / w.amax();
+    let unit = unit.normalize();
+    if !(w.iter().all(|c| c.is_finite()) && a.cross(&unit).norm() > 1e-2_f64.to_radians().sin()) {
+        return Err(format!(
+            "element {t}: weft direction {w:?} is zero, not finite or along the warp"
+        ));
+    }
+    Ok(unit)
 }
 
 /// The element types written, for the first comment line.
