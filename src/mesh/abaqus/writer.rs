@@ -206,12 +206,15 @@ pub fn write_inp_to<W: Write>(
         .map_err(|e| error(format!("cannot write: {e}")))
 }
 
+/// A direction per element, where known.
+type Directions<'a> = Option<&'a [Vector3<f64>]>;
+
 /// Per element: its element set, its orientation (where there is a warp; its second point
 /// the weft where known) and its shell section (with its thickness where known).
 fn write_sections(
     text: &mut String,
     mesh: &Mesh,
-    (warp, weft): (Option<&[Vector3<f64>]>, Option<&[Vector3<f64>]>),
+    (warp, weft): (Directions, Directions),
     thickness: Option<&[f64]>,
 ) -> Result<(), String> {
     let b_is = if weft.is_some() {
