@@ -34,7 +34,12 @@ fn formed(example: &str, overrides: &[&str]) -> (f64, Vec<(Vector3<f64>, f64)>) 
 fn the_quarter_model_forms_as_a_quarter_of_the_whole() {
     // the two runs side by side
     let ((full_force, full), (quarter_force, quarter)) = common::both(
-        || formed("examples/hemisphere.toml", &[STROKE, "blank.pattern=quad"]),
+        || {
+            formed(
+                "examples/hemisphere.toml",
+                &[STROKE, "blank.pattern=quad", "blank.element_size=8"],
+            )
+        },
         || formed("examples/hemisphere-quarter.toml", &[STROKE]),
     );
     assert_eq!(4 * quarter.len(), full.len());

@@ -137,7 +137,8 @@ fn a_light_holder_forms_the_double_dome_through_the_whole_stroke() {
 /// of `file` with `extra` settings: the flange's harmonics (mm) and waviness (mm) at the end.
 fn flange_without_holder(file: &str, extra: &[&str]) -> (Vec<f64>, f64) {
     let mut overrides = vec![
-        "process.blank_holder_force=0".to_string(),
+        "blank.element_size=8".to_string(),
+        "process.blank_holder_force=0".into(),
         "process.stroke=12".into(),
         "output.history_points=6".into(),
     ];
