@@ -4,6 +4,7 @@
 
 mod common;
 
+use common::csv_header_and_last_row;
 use common::thermostamp;
 use std::path::{Path, PathBuf};
 
@@ -41,25 +42,6 @@ fn run_quick(dir: &Path, args: &[&str]) {
     for line in ["steps", "energy balance error", "element-steps per second"] {
         assert!(stdout.contains(line), "summary lacks '{line}':\n{stdout}");
     }
-}
-
-/// Header and last row of a CSV history.
-fn csv_header_and_last_row(path: &Path) -> (Vec<String>, Vec<f64>) {
-    let csv = std::fs::read_to_string(path).unwrap();
-    let mut lines = csv.lines();
-    let header = lines
-        .next()
-        .unwrap()
-        .split(',')
-        .map(str::to_string)
-        .collect();
-    let last = lines
-        .last()
-        .unwrap()
-        .split(',')
-        .map(|v| v.parse().unwrap())
-        .collect();
-    (header, last)
 }
 
 /// The PNGs are PNGs, the `.pvd` lists at least three frames and the first `.vtu` exists.

@@ -52,19 +52,24 @@ fn vtk_available(dir: &Path) -> bool {
 
 /// Runs the reader in `dir` (where VTK's error log goes).
 fn read_with_vtk(dir: &Path, files: &[&Path]) -> Read {
+    parse(&run_reader("tests/read_vtk.py", dir, files))
+}
+
+/// Runs the Python `script` on `files` in `dir`; its standard output, once it succeeded.
+fn run_reader(script: &str, dir: &Path, files: &[&Path]) -> String {
     let out = Command::new("python3")
-        .arg(repo_path("tests/read_vtk.py"))
+        .arg(repo_path(script))
         .args(files)
         .current_dir(dir)
         .output()
         .unwrap();
-    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
     assert!(
         out.status.success(),
-        "VTK could not read the files: {}\n{stdout}",
+        "{script} could not read the files: {}\n{stdout}",
         String::from_utf8_lossy(&out.stderr)
     );
-    parse(&stdout)
+    stdout
 }
 
 fn parse(text: &str) -> Read {
@@ -340,18 +345,8 @@ fn same_in_meshio_and_pyvista(dir: &Path, vtk: &Read, folders: &[&Path], quad_bl
             }
         }
     }
-    let out = Command::new("python3")
-        .arg(repo_path("tests/read_meshio_pyvista.py"))
-        .args(&files)
-        .current_dir(dir)
-        .output()
-        .unwrap();
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "meshio or pyvista could not read the files: {}\n{stdout}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let paths: Vec<&Path> = files.iter().map(|f| f.as_path()).collect();
+    let stdout = run_reader("tests/read_meshio_pyvista.py", dir, &paths);
     let (mut checked, mut times, mut rising) = (0, 0, 0);
     for line in stdout.lines() {
         let words: Vec<&str> = line.split(' ').collect();
@@ -395,15 +390,7 @@ fn same_in_meshio_and_pyvista(dir: &Path, vtk: &Read, folders: &[&Path], quad_bl
 /// The CSV history's `time` is process time, as the frames': its last row is the last frame's
 /// time, and ten times its `solver_time` (the run's time scaling).
 fn csv_times_are_the_frames(run: &Path, frame_times: &[f64]) {
-    let csv = std::fs::read_to_string(run.join("forming.csv")).unwrap();
-    let mut lines = csv.lines();
-    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let last: Vec<f64> = lines
-        .last()
-        .unwrap()
-        .split(',')
-        .map(|v| v.parse().unwrap())
-        .collect();
+    let (header, last) = common::csv_header_and_last_row(&run.join("forming.csv"));
     let column = |name: &str| last[header.iter().position(|h| *h == name).unwrap()];
     let (time, solver_time) = (column("time"), column("solver_time"));
     assert!(

@@ -395,3 +395,22 @@ pub fn both<A: Send, B: Send>(
 ) -> (A, B) {
     rayon::join(a, b)
 }
+
+/// Header and last row of a CSV history.
+pub fn csv_header_and_last_row(path: &std::path::Path) -> (Vec<String>, Vec<f64>) {
+    let csv = std::fs::read_to_string(path).unwrap();
+    let mut lines = csv.lines();
+    let header = lines
+        .next()
+        .unwrap()
+        .split(',')
+        .map(str::to_string)
+        .collect();
+    let last = lines
+        .last()
+        .unwrap()
+        .split(',')
+        .map(|v| v.parse().unwrap())
+        .collect();
+    (header, last)
+}
