@@ -143,7 +143,12 @@ fn run_and_drape_point_to_the_scenario_reference() {
         );
     }
     let reference = std::fs::read_to_string(common::repo_path("docs/guide/scenario.md")).unwrap();
-    for key in ["blank.card", "tools.shape", "process.solver", "output.frames"] {
+    for key in [
+        "blank.card",
+        "tools.shape",
+        "process.solver",
+        "output.frames",
+    ] {
         assert!(
             reference.contains(&format!("| `{key}`")),
             "docs/guide/scenario.md has no row for {key}"
