@@ -547,7 +547,7 @@ fn the_twintex_shear_fit() {
     let rms = stdout
         .split("% of the mean")
         .next()
-        .and_then(|head| last_number(head))
+        .and_then(last_number)
         .expect("the misfit relative to the mean force")
         .0;
     compare(&[
