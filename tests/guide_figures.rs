@@ -270,6 +270,14 @@ const FIGURES: &[(&str, &str)] = &[
     ("hemisphere.peak_punch_force", "the_hemisphere_example"),
     ("hemisphere.max_shear_deg", "the_hemisphere_example"),
     ("hemisphere.draw_in", "the_hemisphere_example"),
+    (
+        "hemisphere_4mm.peak_punch_force",
+        "the_hemisphere_on_4_mm_cells",
+    ),
+    (
+        "hemisphere_4mm.max_shear_deg",
+        "the_hemisphere_on_4_mm_cells",
+    ),
     ("double_dome.peak_punch_force", "the_double_dome_example"),
     ("double_dome.max_shear_deg", "the_double_dome_example"),
     ("double_dome.draw_in", "the_double_dome_example"),
@@ -350,6 +358,29 @@ fn the_hemisphere_example() {
         summary_lines(printed.trim_matches('\n')),
         "the summary of `thermostamp run examples/hemisphere.toml` in the docs is not what it prints"
     );
+}
+
+#[test]
+fn the_hemisphere_on_4_mm_cells() {
+    let (result, _) = forming(
+        "hemisphere-4mm",
+        &[
+            "run",
+            "examples/hemisphere.toml",
+            "--set",
+            "blank.element_size=4",
+        ],
+    );
+    compare(&[
+        (
+            "hemisphere_4mm.peak_punch_force",
+            last(&result, "peak_punch_force"),
+        ),
+        (
+            "hemisphere_4mm.max_shear_deg",
+            last(&result, "max_shear_deg"),
+        ),
+    ]);
 }
 
 #[test]
