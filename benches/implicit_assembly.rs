@@ -7,7 +7,7 @@
 //! bending patches and contact, their tangents differenced where docs/solver.md says), one
 //! residual alone (what each line-search probe costs), and the sparse Cholesky
 //! factorisation and solve of that tangent. A plain timing loop, like the other benches; the
-//! figures go in docs/performance.md.
+//! figures go in docs/dev/performance-history.md.
 
 use nalgebra::Matrix2;
 use std::path::Path;

@@ -5,7 +5,7 @@
 //! and quadrilaterals (one), on 1 and 2 threads: the internal-force pass alone (element loop
 //! plus nodal gather, as in every step) and whole explicit steps (force pass, stable step,
 //! nodal update, energy sums), as element-steps per second. A plain timing loop, like the
-//! material-point bench. Record the figures in docs/performance.md.
+//! material-point bench. Record the figures in docs/dev/performance-history.md.
 
 use nalgebra::Matrix3;
 use std::path::Path;

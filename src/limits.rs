@@ -6,7 +6,8 @@
 //! its key or option (exit code 2), instead of being run to an arbitrary result (an angle taken
 //! modulo a turn after losing every digit, a force bound that overflows to `inf`). The ranges are
 //! wide on purpose: they refuse what is absurd, not what is unusual. They are listed for users in
-//! docs/forming.md ("Scenario file"), README ("Material cards") and each command's `--help`.
+//! docs/guide/scenario.md, docs/guide/materials.md ("Material cards") and each command's
+//! `--help`.
 //!
 //! **Choice:** a value within [`ROUNDING`] (relative) of a closed end counts as at that end: a
 //! number written with a digit too many (`320.0000000001` for a table ending at 320 °C) is not

@@ -138,15 +138,22 @@ fn run_and_drape_point_to_the_scenario_reference() {
     for command in ["run", "drape"] {
         let text = help(&[command]);
         assert!(
-            text.contains("docs/forming.md") && text.contains("\"Scenario file\""),
+            text.contains("docs/guide/scenario.md"),
             "{command} --help does not name the scenario reference:\n{text}"
         );
     }
-    let reference = std::fs::read_to_string(common::repo_path("docs/forming.md")).unwrap();
-    assert!(
-        reference.lines().any(|l| l == "## Scenario file"),
-        "docs/forming.md has no \"Scenario file\" section"
-    );
+    let reference = std::fs::read_to_string(common::repo_path("docs/guide/scenario.md")).unwrap();
+    for key in [
+        "blank.card",
+        "tools.shape",
+        "process.solver",
+        "output.frames",
+    ] {
+        assert!(
+            reference.contains(&format!("| `{key}`")),
+            "docs/guide/scenario.md has no row for {key}"
+        );
+    }
 }
 
 /// What the help of a test must print for its process, in the help's own format.

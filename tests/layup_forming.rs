@@ -241,7 +241,7 @@ fn bad_layups_are_refused_naming_the_key() {
 /// A [0/90, ±45] pair with friction between the plies (0.2) formed by both solvers over the
 /// reduced stroke: each ply's shear per element within 1.5° of the other solver's and within
 /// 0.5° in RMS. (Their punch forces are compared over the full stroke, where they pass 10 % of
-/// their peak, in docs/performance.md; at 6 mm they are 2 % of it, the explicit one's carrying
+/// their peak, in docs/dev/performance-history.md; at 6 mm they are 2 % of it, the explicit one's carrying
 /// its inertia.)
 #[test]
 fn the_two_solvers_agree_on_a_two_ply_layup() {

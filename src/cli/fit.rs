@@ -43,7 +43,9 @@ pub enum ShearTestKind {
 #[derive(clap::Args, Debug)]
 #[command(after_help = format!(
     "{}\n\n{}\n  --terms: powers 1 to {MAX_POWER}",
-    "CSV columns: displacement_mm (crosshead, increasing), force_N (>= 0).\n\
+    "CSV columns: displacement_mm (crosshead, mm, increasing) and force_N (N, >= 0), or\n\
+    displacement and force as `thermostamp test bias-extension` and `picture-frame` write\n\
+    them; other columns are ignored.\n\
     Bias extension (default): --width W --length H (free length, H/W >= 2); the normalised\n\
     shear force of Cao et al. 2008 is solved recursively from small angles (docs/model.md §5).\n\
     Picture frame: --frame-side L (pin to pin) [--fabric-side, default L].\n\

@@ -15,8 +15,8 @@ use std::sync::Arc;
 
 /// Where `thermostamp run --help` and `drape --help` send the reader for the scenario keys.
 pub const SCENARIO_REFERENCE: &str =
-    "Scenario file: every key, its unit and its default are listed in docs/forming.md,\n\
-     section \"Scenario file\". Tutorials: examples/hemisphere.toml, examples/double-dome.toml,\n\
+    "Scenario file: every key, its unit and its default are listed in docs/guide/scenario.md.\n\
+     Tutorials: examples/hemisphere.toml, examples/double-dome.toml,\n\
      examples/hemisphere-quarter.toml.";
 
 /// Runs `job` on `threads` worker threads (default: all cores); more threads than the machine

@@ -15,7 +15,7 @@ use std::path::PathBuf;
     \"process.temperature\" = [280.0, 300.0, 320.0]\n  \
     \"process.blank_holder_force\" = { from = 0.0, to = 300.0, count = 4 }\n  \
     [output]\n  \
-    folder = \"study-results\"              # default: <study name>-results beside the file\n  \
+    folder = \"study-results\"              # default: <study name>-results in the working directory\n  \
     wrinkle_threshold = 0.155             # mm, waviness of a wrinkled case; default half a ply\n  \
     [run]\n  \
     threads_per_case = 1                  # the cases run side by side on the other cores\n\

@@ -19,8 +19,8 @@ pub const MIN_TRAVEL_STEPS: f64 = 500.0;
 
 /// Element-steps per second and thread for the wall-time guess (a quadrilateral counts as two
 /// elements): the measured rate of the forming examples (bending, contact) is 3e5 to 1e6 per
-/// thread, of the bare sheet tests up to 2e6 (docs/performance.md); the guess is good to a
-/// factor of about 3.
+/// thread, of the bare sheet tests up to 2e6 (docs/dev/performance-history.md); the guess is
+/// good to a factor of about 3.
 pub const ELEMENT_STEPS_PER_THREAD_SECOND: f64 = 5e5;
 
 /// Mass scaling that adds more than this many times the blank's own mass makes every force an

@@ -415,7 +415,7 @@ fn relist_plies(
 /// Increments over the run at their largest where [`ImplicitSettings::max_increment`] is not
 /// set, and of the stroke where `process.max_increment` is not **(choice)**: 0.5 mm on the
 /// examples' 30 mm, where the hemisphere's 400 to 20,164 cells converge in 5 to 10 Newton
-/// iterations an increment (docs/performance.md).
+/// iterations an increment (docs/dev/performance-history.md).
 pub const DEFAULT_INCREMENTS: f64 = 60.0;
 
 /// The first multiple of `interval` after `time`, by more than rounding: the next record
@@ -614,8 +614,8 @@ const SPARSE_LOG_OFFSET: f64 = 6.2;
 
 /// The wall time (s) of an implicit forming run of `elements` cells in `increments` increments
 /// on `threads` threads, good to a factor of about 3: `(1 + 38 (N / 5041)^1.6) increments / 60`
-/// on 2 threads, the hemisphere's measured growth (docs/performance.md: 1.8 s on 400 cells,
-/// 7 s on 1,600, 38 s on 5,041, 366 s on 20,164, in about 60 increments).
+/// on 2 threads, the hemisphere's measured growth (docs/dev/performance-history.md: 1.8 s on
+/// 400 cells, 7 s on 1,600, 38 s on 5,041, 366 s on 20,164, in about 60 increments).
 pub fn wall_seconds_of_size(elements: f64, increments: f64, threads: usize) -> f64 {
     let on_two = 1.0 + 38.0 * (elements / 5041.0).powf(1.6);
     on_two * (increments / 60.0) * 2.0 / threads.max(1) as f64
@@ -814,15 +814,16 @@ fn lag_normal(tool: &RigidTool, y: &Vector3<f64>) -> Vector3<f64> {
 /// Relative residual `|K d + r| / |r|` to which conjugate gradients solve for a Newton
 /// correction **(choice)**: Newton's method contracts only four to eight times per iteration
 /// until near the solution (the yarns' slack band), which a correction this close does not
-/// slow (on the 5,041-cell hemisphere 551 iterations against 562 with exact solves; docs/
-/// performance.md).
+/// slow (on the 5,041-cell hemisphere 551 iterations against 562 with exact solves;
+/// docs/dev/performance-history.md).
 const CG_TOLERANCE: f64 = 1e-2;
 
 /// Conjugate-gradient iterations after which the tangent is factorised instead **(choice,
 /// measured** on the hemisphere: about four a solve on average on 5,041 cells, twelve on
 /// 20,164, where a cap of 40 left 34 solves to the full factorisation, 944 MiB at the peak and
-/// 630 s of CPU, and 200 none, 544 MiB and 597 s, the same part; docs/performance.md): an
-/// iteration costs far less than that factorisation, whose factor is the run's largest array.
+/// 630 s of CPU, and 200 none, 544 MiB and 597 s, the same part;
+/// docs/dev/performance-history.md): an iteration costs far less than that factorisation,
+/// whose factor is the run's largest array.
 const CG_ITERATIONS: usize = 200;
 
 /// Takes the converged increment into the state: positions, forces, contact, tools, energies
