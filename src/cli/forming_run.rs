@@ -433,6 +433,9 @@ fn print_summary(
     let mut rows = vec![
         status_row(&result.outcome),
         ("scenario", scenario.origin.clone()),
+    ];
+    rows.extend(scenario.output.note.clone().map(|n| ("note", n)));
+    rows.extend([
         (
             "blank",
             format!(
@@ -501,7 +504,7 @@ fn print_summary(
                 (result.steps * elements) as f64 / result.wall_seconds.max(1e-9)
             ),
         ),
-    ];
+    ]);
     if let Some(state) = result.formed_state() {
         rows.extend(ply_rows(forming, state));
     }

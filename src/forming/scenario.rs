@@ -907,6 +907,10 @@ pub struct Output {
     /// Locking angle of the fabric (degrees), marked on the shear-angle map; cells beyond it
     /// are flagged. `None`: no mark.
     pub locking_angle: Option<f64>,
+    /// A line the summary prints as it is, for what the scenario's author wants every reader
+    /// of its results to know (e.g. that the mesh is a coarse tutorial mesh, and by how much
+    /// its force differs from a converged one).
+    pub note: Option<String>,
 }
 
 impl Default for Output {
@@ -916,6 +920,7 @@ impl Default for Output {
             frames: default_frames(),
             history_points: default_history(),
             locking_angle: None,
+            note: None,
         }
     }
 }
@@ -1059,6 +1064,7 @@ impl Scenario {
     fn check(&self) -> Result<(), String> {
         self.check_ranges()?;
         self.check_process()?;
+        check_note(self.output.note.as_deref())?;
         match &self.tools {
             ToolSet::BuiltIn(t) => self.check_built_in_tools(t)?,
             ToolSet::Files(f) => {
@@ -1411,9 +1417,41 @@ fn parse_scalar(raw: &str) -> toml::Value {
         .unwrap_or_else(|| toml::Value::String(raw.to_string()))
 }
 
+/// `output.note` is one line of at most [`NOTE_LENGTH`] characters, not blank: the summary
+/// prints it as a row of its table.
+fn check_note(note: Option<&str>) -> Result<(), String> {
+    match note {
+        Some(n)
+            if n.trim().is_empty()
+                || n.contains(['\n', '\r'])
+                || n.chars().count() > NOTE_LENGTH =>
+        {
+            Err(format!(
+                "output.note: one line of 1 to {NOTE_LENGTH} characters, printed in the summary"
+            ))
+        }
+        _ => Ok(()),
+    }
+}
+
+/// The longest `output.note`, in characters.
+const NOTE_LENGTH: usize = 300;
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A note is one line the summary can print; a blank one, one of several lines or one
+    /// longer than a screen's worth is refused with its key.
+    #[test]
+    fn a_note_is_one_line() {
+        assert!(check_note(None).is_ok());
+        assert!(check_note(Some("coarse tutorial mesh: the force is 5 % high")).is_ok());
+        for bad in ["", "  ", "two\nlines", &"x".repeat(NOTE_LENGTH + 1)] {
+            let e = check_note(Some(bad)).unwrap_err();
+            assert!(e.starts_with("output.note:"), "{e}");
+        }
+    }
 
     fn interply(text: &str) -> InterplyTable {
         toml::from_str(text).unwrap()
