@@ -30,7 +30,7 @@ fn in_plane(t: &Matrix3<f64>) -> [f64; 3] {
 
 /// Point data: displacement, velocity, reaction (x, y, z); with tools, the contact pressure
 /// (MPa), the contact status (0 free, `1 + k` when tool `k` presses hardest; the codes'
-/// meanings are in the file as `contact_status_codes`) and the gap of the blank's faces to
+/// meanings are in the file's field data, `io::vtk`) and the gap of the blank's faces to
 /// each tool (mm, `gap_<tool>`). Cell data: shear angle (degrees), current warp and weft
 /// directions, thickness, membrane forces `membrane_force` (xx, yy, xy in the reference x–y
 /// axes, N/mm), the yarn tensions `yarn_tension_warp` and `yarn_tension_weft` (N per mm of
