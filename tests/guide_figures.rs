@@ -271,12 +271,12 @@ const FIGURES: &[(&str, &str)] = &[
     ("hemisphere.max_shear_deg", "the_hemisphere_example"),
     ("hemisphere.draw_in", "the_hemisphere_example"),
     (
-        "hemisphere_4mm.peak_punch_force",
-        "the_hemisphere_on_4_mm_cells",
+        "hemisphere_8mm.peak_punch_force",
+        "the_hemisphere_on_8_mm_cells",
     ),
     (
-        "hemisphere_4mm.max_shear_deg",
-        "the_hemisphere_on_4_mm_cells",
+        "hemisphere_8mm.max_shear_deg",
+        "the_hemisphere_on_8_mm_cells",
     ),
     ("double_dome.peak_punch_force", "the_double_dome_example"),
     ("double_dome.max_shear_deg", "the_double_dome_example"),
@@ -361,23 +361,23 @@ fn the_hemisphere_example() {
 }
 
 #[test]
-fn the_hemisphere_on_4_mm_cells() {
+fn the_hemisphere_on_8_mm_cells() {
     let (result, _) = forming(
-        "hemisphere-4mm",
+        "hemisphere-8mm",
         &[
             "run",
             "examples/hemisphere.toml",
             "--set",
-            "blank.element_size=4",
+            "blank.element_size=8",
         ],
     );
     compare(&[
         (
-            "hemisphere_4mm.peak_punch_force",
+            "hemisphere_8mm.peak_punch_force",
             last(&result, "peak_punch_force"),
         ),
         (
-            "hemisphere_4mm.max_shear_deg",
+            "hemisphere_8mm.max_shear_deg",
             last(&result, "max_shear_deg"),
         ),
     ]);
@@ -420,6 +420,8 @@ fn the_hemisphere_without_a_holder() {
             "process.blank_holder_force=0",
             "--set",
             "process.stroke=12",
+            "--set",
+            "blank.element_size=8",
         ],
     );
     compare(&[
