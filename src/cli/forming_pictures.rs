@@ -519,7 +519,7 @@ fn inner_edge(
 }
 
 /// A map of the part as `view` sees `points` (a position per node), a value per cell, the
-/// tools' outlines over it; a layup's plies side by side, the punch's side first. Cells are
+/// tools' outlines over it; a layup's plies side by side in a grid ([`panels`]). Cells are
 /// drawn far to near (painter's algorithm), so that the near side of a deep part covers its
 /// far side; in a shaded view each cell's colour is dimmed as it turns from the viewer.
 fn part_map(
@@ -530,11 +530,8 @@ fn part_map(
 ) -> MapPlot {
     let model = &forming.model;
     let flat: Vec<(f64, f64)> = points.iter().map(|p| view.project(p)).collect();
-    let (lo, hi) = flat.iter().fold((f64::MAX, f64::MIN), |(lo, hi), p| {
-        (lo.min(p.0), hi.max(p.0))
-    });
-    let panel = 1.1 * (hi - lo);
     let plies = model.plies.len();
+    let offset = panels(&flat, plies);
     let cells = &model.mesh.cells;
     let mut order: Vec<usize> = (0..cells.len()).collect();
     let depth = |k: usize| {
@@ -548,11 +545,11 @@ fn part_map(
     let depths: Vec<f64> = (0..cells.len()).map(depth).collect();
     order.sort_by(|&a, &b| depths[a].total_cmp(&depths[b]));
     let polygon = |k: usize| {
-        let dx = panel * model.ply_index(k) as f64;
+        let (dx, dy) = offset(model.ply_index(k));
         cells[k]
             .nodes()
             .iter()
-            .map(|&n| (flat[n].0 + dx, flat[n].1))
+            .map(|&n| (flat[n].0 + dx, flat[n].1 + dy))
             .collect()
     };
     let shade = |k: usize| {
@@ -574,27 +571,26 @@ fn part_map(
     );
     if view.shaded {
         map.shade = order.iter().map(|&k| shade(k)).collect();
-    } else {
+    } else if plies == 1 {
+        // a layup's panels are offset from each other: their coordinates are not the part's
         map.axes = Some(("x (mm)".into(), "y (mm)".into()));
     }
     if plies > 1 {
         map.title = map.title.replacen(
             '\n',
-            &format!("; plies 1 to {plies} from the punch's side, left to right\n"),
+            &format!("; plies 1 to {plies} from the punch's side, in reading order\n"),
             1,
         );
-        if let Some(axes) = &mut map.axes {
-            axes.0 = format!("x (mm), ply k drawn (k - 1) x {panel:.0} mm to the right");
-        }
     }
-    // a projected part hides the tools' lines behind it; a tolerance of a quarter cell keeps
-    // those that lie on the part (the die's opening under the flange)
-    let hidden = |at: (f64, f64), depth: f64| {
+    // a projected part hides the tools' lines behind it (a ply's own cells); a tolerance of a
+    // quarter cell keeps those that lie on the part (the die's opening under the flange)
+    let hidden = |at: (f64, f64), depth: f64, ply: usize| {
         view.shaded
-            && order.iter().enumerate().any(|(i, &k)| {
-                inside(&map.cells[i], at)
+            && (0..cells.len()).any(|k| {
+                model.ply_index(k) == ply
                     && depth_at(&cells[k].nodes(), points, view, at)
                         > depth + 0.25 * forming.element_size
+                    && inside(&polygon_at(&cells[k].nodes(), &flat), at)
             })
     };
     map.lines = outlines
@@ -605,21 +601,42 @@ fn part_map(
             colour: o.colour,
             segments: (0..plies)
                 .flat_map(|ply| {
-                    let dx = panel * ply as f64;
+                    let (dx, dy) = offset(ply);
                     o.segments.iter().filter_map(move |s| {
                         let middle = 0.5 * (s[0] + s[1]);
-                        let (x, y) = view.project(&middle);
                         let ends = s.map(|p| {
                             let (x, y) = view.project(&p);
-                            (x + dx, y)
+                            (x + dx, y + dy)
                         });
-                        (!hidden((x + dx, y), middle.dot(&view.toward))).then_some(ends)
+                        let seen = !hidden(view.project(&middle), middle.dot(&view.toward), ply);
+                        seen.then_some(ends)
                     })
                 })
                 .collect(),
         })
         .collect();
     map
+}
+
+/// Where each ply's panel goes (an offset in the picture's plane): one panel for a single
+/// ply, a layup's in a grid of about as many columns as rows, ply 1 (the punch's side) top
+/// left, in reading order.
+fn panels(flat: &[(f64, f64)], plies: usize) -> impl Fn(usize) -> (f64, f64) {
+    let (x0, x1, y0, y1) = flat.iter().fold(
+        (f64::MAX, f64::MIN, f64::MAX, f64::MIN),
+        |(x0, x1, y0, y1), p| (x0.min(p.0), x1.max(p.0), y0.min(p.1), y1.max(p.1)),
+    );
+    let columns = (plies as f64).sqrt().ceil().max(1.0) as usize;
+    let (width, height) = (1.1 * (x1 - x0), 1.1 * (y1 - y0));
+    move |ply| {
+        let (row, column) = (ply / columns, ply % columns);
+        (width * column as f64, -height * row as f64)
+    }
+}
+
+/// The projected corners of a cell, unshifted.
+fn polygon_at(nodes: &[usize], flat: &[(f64, f64)]) -> Vec<(f64, f64)> {
+    nodes.iter().map(|&n| flat[n]).collect()
 }
 
 /// The depth (towards the viewer) of the cell of `nodes` at the screen point `(x, y)`: on the

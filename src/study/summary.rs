@@ -318,12 +318,19 @@ fn heat_map(
     map
 }
 
-/// A heat map cell's text: its value to three significant digits, or why it has none.
+/// A heat map cell's text: its value to three significant digits (below 0.01 in scientific
+/// notation, so that the cell stays narrow), or why it has none.
 fn cell_text(value: f64, status: &str) -> String {
     if !value.is_finite() {
         return if status == "done" { "-" } else { status }.to_string();
     }
-    let digits = 2 - value.abs().log10().floor().clamp(-3.0, 2.0) as i32;
+    if value == 0.0 {
+        return "0".into();
+    }
+    if value.abs() < 0.01 {
+        return format!("{value:.1e}");
+    }
+    let digits = 2 - value.abs().log10().floor().clamp(-2.0, 2.0) as i32;
     format!("{value:.*}", digits.max(0) as usize)
 }
 
@@ -382,6 +389,8 @@ mod tests {
     fn heat_map_cells_print_their_values() {
         assert_eq!(cell_text(27.73, "done"), "27.7");
         assert_eq!(cell_text(0.05234, "done"), "0.0523");
+        assert_eq!(cell_text(0.0, "done"), "0");
+        assert_eq!(cell_text(2.1e-6, "done"), "2.1e-6");
         assert_eq!(cell_text(140.2, "done"), "140");
         assert_eq!(cell_text(f64::NAN, "failed"), "failed");
         assert_eq!(cell_text(f64::NAN, "done"), "-");
