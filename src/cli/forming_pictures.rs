@@ -588,9 +588,9 @@ fn part_map(
         view.shaded
             && (0..cells.len()).any(|k| {
                 model.ply_index(k) == ply
-                    && depth_at(&cells[k].nodes(), points, view, at)
+                    && depth_at(cells[k].nodes(), points, view, at)
                         > depth + 0.25 * forming.element_size
-                    && inside(&polygon_at(&cells[k].nodes(), &flat), at)
+                    && inside(&polygon_at(cells[k].nodes(), &flat), at)
             })
     };
     map.lines = outlines

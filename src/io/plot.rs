@@ -275,7 +275,7 @@ fn draw(
     root: &DrawingArea<PlotBackend, Shift>,
     plot: &LinePlot,
     series: &[Vec<(f64, f64)>],
-    right: Option<(&LinePlot, &[Vec<(f64, f64)>])>,
+    right: Option<(&LinePlot, &[Points])>,
 ) -> Result<(), String> {
     let (width, height) = root.dim_in_pixel();
     let design = DesignScale::of(root);
@@ -721,7 +721,7 @@ pub struct MapPlot {
     pub cell_labels: Vec<String>,
     /// Ticks of the x and y axes at given places with given labels (e.g. the cases'
     /// parameter values); `None`: round numbers.
-    pub ticks: Option<(Vec<(f64, String)>, Vec<(f64, String)>)>,
+    pub ticks: Option<(Ticks, Ticks)>,
     /// Lines drawn over the cells, each with its legend entry.
     pub lines: Vec<MapLine>,
     /// A point marked with a ring and a label (e.g. where the largest value is).
@@ -729,6 +729,12 @@ pub struct MapPlot {
     /// Legend entries for kinds of cell (e.g. wrinkled, failed), beside those of the lines.
     pub legend: Vec<LegendCell>,
 }
+
+/// Ticks of an axis: each place and its label.
+pub type Ticks = Vec<(f64, String)>;
+
+/// The finite points of a series.
+type Points = Vec<(f64, f64)>;
 
 /// A value marked on the colour bar with a line and `label`; with `flags_cells`, cells above
 /// it are drawn in [`LIMIT_COLOUR`] (the shear map's cells beyond the locking angle).
