@@ -1,11 +1,11 @@
-//! `thermostamp run scenario.toml`: a thermo-stamping run with CSV history, ParaView frames, a
-//! punch-force plot, a progress bar and a summary table.
+//! `thermostamp run scenario.toml`: a thermo-stamping run with CSV history, ParaView frames, the
+//! pictures (`forming_pictures`), a progress bar and a summary table.
 
+use super::forming_pictures::{write_pictures, PICTURES};
 use super::shared::{
     print_checked_table, status_row, take_output_folder, with_threads, Bar, Interrupt,
     ScenarioArgs, Watch,
 };
-use crate::contact::ply_contact::InterplyNode;
 use crate::experiment::sheet_test::{FrameOutput, HistorySink, LiveOutput};
 use crate::forming::advice::stop_advice;
 use crate::forming::export::{write_formed_blank, FORMED_INP, FORMED_VTU};
@@ -13,7 +13,6 @@ use crate::forming::preflight::implicit_advice;
 use crate::forming::run::{ply_columns, ply_measures, shear_angles, RESULT_COLUMNS, RESULT_CSV};
 use crate::forming::{run::FormingRun, FormingModel, FormingRecord, Scenario};
 use crate::io::output_folder::ProductFiles;
-use crate::io::plot::{write_map_png, write_png, LinePlot, LineStyle, MapPlot, Series};
 use crate::io::vtk::PvdSeries;
 use crate::io::CsvStream;
 use crate::solver::estimate::RunEstimate;
@@ -95,30 +94,10 @@ fn forming(args: &Args) -> anyhow::Result<()> {
     if result.records.is_empty() {
         return result.outcome.map(|_| ()).map_err(anyhow::Error::from);
     }
-    let mut files = vec![
-        csv,
-        write_force_plot(&dir, &result.records)?,
-        write_result_row(&dir, &scenario, &forming, &result)?,
-    ];
+    let mut files = vec![csv, write_result_row(&dir, &scenario, &forming, &result)?];
+    let pictures = write_pictures(&dir, &scenario, &forming, &result)?;
+    files.extend(pictures.into_iter().map(|p| p.path));
     if let Some(state) = result.formed_state() {
-        let part = match &result.outcome {
-            Ok(_) => "Formed part".to_string(),
-            Err(_) => format!(
-                "Part at {:.2} of {} mm, the run stopped",
-                forming.punch.displacement(state.time),
-                scenario.process.stroke
-            ),
-        };
-        let title = format!("{part}: shear angle (top view)");
-        files.push(write_shear_map(
-            &dir,
-            &forming,
-            (state, title),
-            scenario.output.locking_angle,
-        )?);
-        if forming.model.plies.len() > 1 {
-            files.push(write_slip_map(&dir, &forming, (state, part))?);
-        }
         files.extend(write_formed_blank(&dir, &forming.model, state)?);
     }
     if scenario.output.frames > 0 {
@@ -183,18 +162,15 @@ fn row(r: &FormingRecord, time_scaling: f64) -> [f64; 19] {
 /// The files a run writes, by which a later run into the folder finds and clears them.
 const CSV: &str = "forming.csv";
 
-const FORCE_PLOT: &str = "forming-punch-force.png";
-const SHEAR_MAP: &str = "forming-shear-map.png";
-const SLIP_MAP: &str = "forming-slip-map.png";
 const SERIES: &str = "forming";
 
 fn products() -> ProductFiles {
     ProductFiles {
-        names: [
-            CSV, RESULT_CSV, FORCE_PLOT, SHEAR_MAP, SLIP_MAP, FORMED_INP, FORMED_VTU,
-        ]
-        .map(String::from)
-        .to_vec(),
+        names: [CSV, RESULT_CSV, FORMED_INP, FORMED_VTU]
+            .into_iter()
+            .chain(PICTURES)
+            .map(String::from)
+            .collect(),
         series: Some(SERIES.into()),
     }
 }
@@ -293,119 +269,6 @@ fn write_result_row(
     )
     .with_context(|| format!("cannot write {}", path.display()))?;
     Ok(path)
-}
-
-/// `forming-punch-force.png`.
-fn write_force_plot(dir: &Path, records: &[FormingRecord]) -> anyhow::Result<PathBuf> {
-    let png = dir.join(FORCE_PLOT);
-    let plot = LinePlot {
-        title: "Forming: punch force".into(),
-        x_label: "punch stroke (mm)".into(),
-        y_label: "punch force (N)".into(),
-        series: vec![Series::new(
-            "simulation",
-            records.iter().map(|r| (r.stroke, r.punch_force)).collect(),
-            LineStyle::Solid,
-        )],
-    };
-    write_png(&png, &plot, 900, 600)?;
-    Ok(png)
-}
-
-/// `forming-shear-map.png`: the part in `state` from above, coloured by shear angle, under
-/// `title`; a layup's plies side by side on one colour scale, the punch's side first.
-fn write_shear_map(
-    dir: &Path,
-    forming: &FormingModel,
-    (state, title): (&crate::solver::State, String),
-    locking_angle: Option<f64>,
-) -> anyhow::Result<PathBuf> {
-    let values = shear_angles(&forming.model, state)
-        .into_iter()
-        .map(f64::abs)
-        .collect();
-    let label = match locking_angle {
-        Some(l) => format!("|shear angle| (°), locking {l}° marked"),
-        None => "|shear angle| (°)".into(),
-    };
-    let path = dir.join(SHEAR_MAP);
-    let map = ply_map(forming, state, title, (values, label), locking_angle);
-    write_map_png(&path, &map, 900, 700)?;
-    Ok(path)
-}
-
-/// `forming-slip-map.png` of a layup: how far each ply slid over its neighbours, each cell
-/// coloured by the mean of its corners' `interply_slip` (the larger of a node's two sides),
-/// the plies side by side on one scale.
-fn write_slip_map(
-    dir: &Path,
-    forming: &FormingModel,
-    (state, part): (&crate::solver::State, String),
-) -> anyhow::Result<PathBuf> {
-    let slip: Vec<f64> = state.interply.iter().map(InterplyNode::slip).collect();
-    let values = forming
-        .model
-        .mesh
-        .cells
-        .iter()
-        .map(|c| c.nodes().iter().map(|&n| slip[n]).sum::<f64>() / c.nodes().len() as f64)
-        .collect();
-    let title = format!("{part}: interply slip (top view)");
-    let label = "interply slip (mm)".to_string();
-    let path = dir.join(SLIP_MAP);
-    write_map_png(
-        &path,
-        &ply_map(forming, state, title, (values, label), None),
-        900,
-        700,
-    )?;
-    Ok(path)
-}
-
-/// A map of the part in `state` from above, a value per cell, the plies of a layup side by
-/// side (the punch's side first), `limit` marked on the scale.
-fn ply_map(
-    forming: &FormingModel,
-    state: &crate::solver::State,
-    title: String,
-    (values, value_label): (Vec<f64>, String),
-    limit: Option<f64>,
-) -> MapPlot {
-    let model = &forming.model;
-    let x = &state.positions;
-    let (lo, hi) = x
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
-            (lo.min(p.x), hi.max(p.x))
-        });
-    let panel = 1.1 * (hi - lo);
-    let shift = |k: usize| panel * model.ply_index(k) as f64;
-    let (title, x_axis) = match model.plies.len() {
-        1 => (title, "x (mm)".to_string()),
-        n => (
-            format!("{title}; plies 1 to {n} from the punch's side, left to right"),
-            format!("x (mm), ply k drawn (k - 1) x {panel:.0} mm to the right"),
-        ),
-    };
-    MapPlot {
-        title,
-        axes: (x_axis, "y (mm)".into()),
-        equal_scales: true,
-        value_label,
-        cells: model
-            .mesh
-            .cells
-            .iter()
-            .enumerate()
-            .map(|(k, t)| {
-                let dx = shift(k);
-                t.nodes().iter().map(|&n| (x[n].x + dx, x[n].y)).collect()
-            })
-            .collect(),
-        values,
-        limit,
-        outlined: Vec::new(),
-    }
 }
 
 /// A flange measure, or why there is none (tools from files without `tools.flange_radius`).

@@ -317,22 +317,15 @@ pub fn flange_wrinkles(f: &FormingModel, state: &State, nodal_area: &[f64]) -> W
 /// punch's side): its gaps measured from where it lies flat on the die under the plies above
 /// it, and lifted where that gap exceeds half its own thickness.
 pub fn ply_wrinkles(f: &FormingModel, state: &State, nodal_area: &[f64], ply: usize) -> Wrinkles {
-    let die = &f.model.tools[f.die_tool];
-    let plies = &f.model.plies;
-    let half = 0.5 * plies[ply].laminate.reference_thickness();
-    let above: f64 = plies[ply + 1..]
-        .iter()
-        .map(|p| p.laminate.reference_thickness())
-        .sum();
-    let translation = state.tool_translations[f.die_tool];
-    let own = plies[ply].nodes.clone();
+    let half = 0.5 * f.model.plies[ply].laminate.reference_thickness();
+    let own = f.model.plies[ply].nodes.clone();
     let nodes: Vec<FlangeNode> = own
         .map(|n| (state.positions[n], nodal_area[n]))
         .filter(|(x, _)| f.in_flange(x))
         .map(|(x, area)| FlangeNode {
             distance: f.distance_from_ridge(&x),
             band: f.flange_band(&x),
-            gap: die.gap(&(x - translation), half + above).max(0.0),
+            gap: die_gap(f, state, ply, &x),
             area,
         })
         .collect();
@@ -361,6 +354,21 @@ pub fn ply_wrinkles(f: &FormingModel, state: &State, nodal_area: &[f64], ply: us
             waviness: w.waviness.max(0.5 * (highest[n.band] - lowest[n.band])),
             wavy_area: w.wavy_area + above_threshold(r - lowest[n.band], n.area),
         })
+}
+
+/// The gap of a point `x` of ply `ply` (index into [`Model::plies`]) to the die in `state`
+/// (mm, 0 in contact): measured from where the ply lies flat on the die under the plies above
+/// it, as [`ply_wrinkles`] measures the flange.
+pub fn die_gap(f: &FormingModel, state: &State, ply: usize, x: &Vector3<f64>) -> f64 {
+    let plies = &f.model.plies;
+    let half = 0.5 * plies[ply].laminate.reference_thickness();
+    let above: f64 = plies[ply + 1..]
+        .iter()
+        .map(|p| p.laminate.reference_thickness())
+        .sum();
+    let die = &f.model.tools[f.die_tool];
+    die.gap(&(x - state.tool_translations[f.die_tool]), half + above)
+        .max(0.0)
 }
 
 /// Nodes on the edge of the blank: those of the edges that belong to one element only.

@@ -11,6 +11,7 @@ use plotters::chart::SeriesAnno;
 use plotters::coord::ranged1d::{KeyPointHint, NoDefaultFormatting, Ranged, ValueFormatter};
 use plotters::coord::Shift;
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 use plotters::style::{register_font, FontStyle};
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
@@ -62,6 +63,17 @@ pub struct LinePlot {
     pub x_label: String,
     pub y_label: String,
     pub series: Vec<Series>,
+}
+
+/// A line plot with a second y axis on the right for series of another quantity (e.g. forces
+/// on the left, a displacement on the right); the right axis's series take the palette's
+/// colours after the left's.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TwinPlot {
+    pub plot: LinePlot,
+    /// The right axis's label, with units.
+    pub right_label: String,
+    pub right: Vec<Series>,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -132,15 +144,45 @@ const MARGIN: f64 = 0.04;
 
 /// Writes the plot as a PNG of `width` x `height` pixels (e.g. 900 x 600).
 pub fn write_png(path: &Path, plot: &LinePlot, width: u32, height: u32) -> Result<(), PlotError> {
+    write_lines(path, plot, None, (width, height))
+}
+
+/// Writes the plot with its second axis as a PNG of `width` x `height` pixels.
+pub fn write_twin_png(
+    path: &Path,
+    twin: &TwinPlot,
+    width: u32,
+    height: u32,
+) -> Result<(), PlotError> {
+    let right = LinePlot {
+        series: twin.right.clone(),
+        y_label: twin.right_label.clone(),
+        ..twin.plot.clone()
+    };
+    write_lines(path, &twin.plot, Some(&right), (width, height))
+}
+
+/// The line plot `plot`, with `right`'s series on a second axis where given.
+fn write_lines(
+    path: &Path,
+    plot: &LinePlot,
+    right: Option<&LinePlot>,
+    (width, height): (u32, u32),
+) -> Result<(), PlotError> {
     check_size(plot, width, height)?;
     let series = finite_series(plot)?;
+    let right = match right {
+        Some(r) => Some((r, finite_series(r)?)),
+        None => None,
+    };
     let font = embedded_font()?;
     let (fine_width, fine_height) = (SUPERSAMPLE * width, SUPERSAMPLE * height);
     let mut fine = vec![255u8; 3 * fine_width as usize * fine_height as usize];
     {
         let bitmap = BitMapBackend::with_buffer(&mut fine, (fine_width, fine_height));
         let root = PlotBackend { bitmap, font }.into_drawing_area();
-        draw(&root, plot, &series).map_err(|message| PlotError::Draw {
+        let right = right.as_ref().map(|(r, s)| (*r, s.as_slice()));
+        draw(&root, plot, &series, right).map_err(|message| PlotError::Draw {
             title: plot.title.clone(),
             message,
         })?;
@@ -227,18 +269,21 @@ impl DesignScale {
     }
 }
 
-/// Draws frame, grid, curves and legend; `series` holds the finite points of `plot.series`.
+/// Draws frame, grid, curves and legend; `series` holds the finite points of `plot.series`,
+/// `right` a second plot's series and their finite points for the axis on the right.
 fn draw(
     root: &DrawingArea<PlotBackend, Shift>,
     plot: &LinePlot,
     series: &[Vec<(f64, f64)>],
+    right: Option<(&LinePlot, &[Points])>,
 ) -> Result<(), String> {
     let (width, height) = root.dim_in_pixel();
     let design = DesignScale::of(root);
     let (px, font) = (|d: f64| design.px(d), |d: f64| design.font(d));
 
     root.fill(&WHITE).map_err(|e| e.to_string())?;
-    let all = series.iter().flatten().copied();
+    let right_points = right.map_or(&[][..], |(_, points)| points);
+    let all = series.iter().chain(right_points).flatten().copied();
     // About one tick every 110 design pixels across and 85 up, room for labels like "-1.5e-6".
     let ticks =
         |pixels: u32, spacing: f64| (f64::from(pixels) / design.scale / spacing).clamp(3.0, 12.0);
@@ -246,25 +291,57 @@ fn draw(
         padded_range(all.clone().map(|(x, _)| x)),
         ticks(width, 110.0),
     );
-    let y_axis = Axis::new(padded_range(all.map(|(_, y)| y)), ticks(height, 85.0));
+    let y_ticks = ticks(height, 85.0);
+    let y_axis = Axis::new(
+        padded_range(series.iter().flatten().map(|&(_, y)| y)),
+        y_ticks,
+    );
+    // the right axis: its series' span, or (unused) the left's
+    let y_right = match right {
+        Some((_, points)) => Axis::new(padded_range(points.iter().flatten().map(|p| p.1)), y_ticks),
+        None => Axis::new(y_axis.range.clone(), y_ticks),
+    };
 
-    // Room left of the plot for the widest tick label, the tick marks and the rotated label.
+    // Room beside the plot for the widest tick label, the tick marks and the rotated label.
     let tick_style = TextStyle::from(font(15.0).into_font());
-    let widest_tick = y_axis
-        .major
-        .iter()
-        .map(|v| root.estimate_text_size(&y_axis.format_ext(v), &tick_style))
-        .try_fold(0, |widest, size| size.map(|(w, _)| widest.max(w)))
-        .map_err(|e| e.to_string())?;
-    let legend_corner = emptiest_corner(series, &x_axis.range, &y_axis.range);
+    let widest = |axis: &Axis| {
+        axis.major
+            .iter()
+            .map(|v| root.estimate_text_size(&axis.format_ext(v), &tick_style))
+            .try_fold(0, |widest, size| size.map(|(w, _)| widest.max(w)))
+            .map_err(|e| e.to_string())
+    };
+    let widest_tick = widest(&y_axis)?;
+    let right_room = match right {
+        Some(_) => widest(&y_right)? + px(44.0),
+        None => 0,
+    };
+    // the legend's corner judged on all curves, the right's scaled onto the left axis
+    let onto_left = |(x, y): (f64, f64)| {
+        let (r, l) = (&y_right.range, &y_axis.range);
+        (
+            x,
+            l.start + (y - r.start) / (r.end - r.start) * (l.end - l.start),
+        )
+    };
+    let mut placed: Vec<Vec<(f64, f64)>> = series.to_vec();
+    placed.extend(
+        right_points
+            .iter()
+            .map(|s| s.iter().copied().map(onto_left).collect()),
+    );
+    let legend_corner = emptiest_corner(&placed, &x_axis.range, &y_axis.range);
+    let x_right = Axis::new(x_axis.range.clone(), ticks(width, 110.0));
 
-    let mut chart = ChartBuilder::on(root)
-        .caption(&plot.title, font(24.0))
+    let body = titled(root, &plot.title, &design)?;
+    let mut chart = ChartBuilder::on(&body)
         .margin(px(16.0))
         .x_label_area_size(px(56.0))
         .y_label_area_size(widest_tick + px(44.0))
+        .right_y_label_area_size(right_room)
         .build_cartesian_2d(x_axis, y_axis)
-        .map_err(|e| e.to_string())?;
+        .map_err(|e| e.to_string())?
+        .set_secondary_coord(x_right, y_right);
     chart
         .configure_mesh()
         .x_desc(&plot.x_label)
@@ -277,12 +354,21 @@ fn draw(
         .axis_style(BLACK.stroke_width(px(1.0)))
         .draw()
         .map_err(|e| e.to_string())?;
+    if let Some((right_plot, _)) = right {
+        chart
+            .configure_secondary_axes()
+            .y_desc(&right_plot.y_label)
+            .axis_desc_style(font(18.0))
+            .label_style(font(15.0))
+            .axis_style(BLACK.stroke_width(px(1.0)))
+            .draw()
+            .map_err(|e| e.to_string())?;
+    }
 
     let line_width = px(2.5);
     let legend_size = px(24.0) as i32;
-    for (index, (meta, points)) in plot.series.iter().zip(series).enumerate() {
+    let curve = |index: usize, meta: &Series, points: &[(f64, f64)]| {
         let color = PALETTE[meta.colour.unwrap_or(index) % PALETTE.len()];
-        let style = color.stroke_width(line_width);
         // A line through a single point (or the same point repeated) would draw nothing:
         // show that point as a dot.
         let shape = if points.windows(2).all(|pair| pair[0] == pair[1]) {
@@ -290,6 +376,11 @@ fn draw(
         } else {
             meta.style
         };
+        (color, shape)
+    };
+    for (index, (meta, points)) in plot.series.iter().zip(series).enumerate() {
+        let (color, shape) = curve(index, meta, points);
+        let style = color.stroke_width(line_width);
         let drawn = match shape {
             LineStyle::Solid => chart.draw_series(LineSeries::new(points.iter().copied(), style)),
             LineStyle::Dashed => chart.draw_series(DashedLineSeries::new(
@@ -309,6 +400,31 @@ fn draw(
             set_legend(drawn, &meta.label, meta.style, legend_size, style);
         }
     }
+    let right_series = right.map_or(&[][..], |(r, _)| r.series.as_slice());
+    for (index, (meta, points)) in right_series.iter().zip(right_points).enumerate() {
+        let (color, shape) = curve(plot.series.len() + index, meta, points);
+        let style = color.stroke_width(line_width);
+        let drawn = match shape {
+            LineStyle::Solid => {
+                chart.draw_secondary_series(LineSeries::new(points.iter().copied(), style))
+            }
+            LineStyle::Dashed => chart.draw_secondary_series(DashedLineSeries::new(
+                points.iter().copied(),
+                px(10.0),
+                px(6.0),
+                style,
+            )),
+            LineStyle::Markers => chart.draw_secondary_series(
+                points
+                    .iter()
+                    .map(|&p| Circle::new(p, px(3.5), color.filled())),
+            ),
+        }
+        .map_err(|e| e.to_string())?;
+        if !meta.label.is_empty() {
+            set_legend(drawn, &meta.label, meta.style, legend_size, style);
+        }
+    }
 
     // Close the frame on the top and right, where plotters draws no axis.
     let (columns, rows) = chart.plotting_area().get_pixel_range();
@@ -318,7 +434,7 @@ fn draw(
     ))
     .map_err(|e| e.to_string())?;
 
-    if plot.series.len() > 1 {
+    if plot.series.len() + right_series.len() > 1 {
         chart
             .configure_series_labels()
             .position(legend_corner)
@@ -331,6 +447,28 @@ fn draw(
             .map_err(|e| e.to_string())?;
     }
     root.present().map_err(|e| e.to_string())
+}
+
+/// Draws `title` centred at the top of `root`, a line of text per line of it, the first
+/// larger; returns the area below it. An empty title takes no room.
+fn titled<'b>(
+    root: &DrawingArea<PlotBackend<'b>, Shift>,
+    title: &str,
+    design: &DesignScale,
+) -> Result<DrawingArea<PlotBackend<'b>, Shift>, String> {
+    let width = root.dim_in_pixel().0 as i32;
+    let mut y = design.px(10.0) as i32;
+    for (k, line) in title.lines().enumerate() {
+        let size = if k == 0 { 22.0 } else { 17.0 };
+        let style =
+            TextStyle::from(design.font(size).into_font()).pos(Pos::new(HPos::Center, VPos::Top));
+        root.draw(&Text::new(line.to_string(), (width / 2, y), style))
+            .map_err(|e| e.to_string())?;
+        y += design.px(1.35 * size) as i32;
+    }
+    Ok(root
+        .clone()
+        .shrink((0, y), (width as u32, root.dim_in_pixel().1 - y as u32)))
 }
 
 /// Gives the series its legend entry: a short stretch of its line, or one of its dots.
@@ -550,35 +688,114 @@ fn emptiest_corner(
     .map_or(SeriesLabelPosition::UpperRight, |(corner, _)| corner)
 }
 
-/// A map of a cell field over a triangulated part seen from above (x–y), each triangle filled
-/// with the colour of its value, with a colour bar; cells beyond `limit` are drawn in the limit
-/// colour (magenta) and the limit is marked on the bar. For the shear angle of a formed part
-/// with the locking angle.
+/// A map of a cell field: cells (polygons in the plot's x–y, e.g. a part seen from above, a
+/// projected view of it, or cases over two parameters) filled with the colour of their value,
+/// beside a colour bar; optionally lines over it (tools' outlines), a marked cell (the
+/// largest value), a limit marked on the bar, values printed in the cells and a legend.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MapPlot {
     pub title: String,
-    /// Labels of the x and y axes, with units.
-    pub axes: (String, String),
-    /// Whether x and y share one scale (a part seen from above) or each fills the plot (a map
-    /// over two parameters).
+    /// Labels of the x and y axes, with units; `None`: no axes (a projected view, whose
+    /// coordinates mean nothing to the reader).
+    pub axes: Option<(String, String)>,
+    /// Whether x and y share one scale (a part) or each fills the plot (a map over two
+    /// parameters).
     pub equal_scales: bool,
     /// Label of the colour bar, with units.
     pub value_label: String,
-    /// The cells' corners (a polygon each), one value per cell; a value that is not finite
-    /// (no result) is drawn grey.
+    /// The cells' corners (a polygon each), drawn in this order (a projected view sorts them
+    /// far to near), one value per cell; a value that is not finite (no result) is grey.
     pub cells: Vec<Vec<(f64, f64)>>,
     pub values: Vec<f64>,
-    /// Values above this are flagged (e.g. the locking angle); `None`: no flag.
-    pub limit: Option<f64>,
+    /// The colour bar's span; `None`: from 0 to the largest value or the limit, whichever is
+    /// higher ([`MapPlot::colour_range`]).
+    pub scale: Option<(f64, f64)>,
+    /// A value marked on the colour bar (e.g. the locking angle); `None`: none.
+    pub limit: Option<Limit>,
     /// Cells drawn with a thick black outline, their colour kept (e.g. the cases of a study
     /// that wrinkled); empty: none.
     pub outlined: Vec<bool>,
+    /// Brightness of each cell's colour, 0 to 1 (the light on a projected view); empty: 1.
+    pub shade: Vec<f64>,
+    /// Text printed in each cell (e.g. its value); empty: none.
+    pub cell_labels: Vec<String>,
+    /// Ticks of the x and y axes at given places with given labels (e.g. the cases'
+    /// parameter values); `None`: round numbers.
+    pub ticks: Option<(Ticks, Ticks)>,
+    /// Lines drawn over the cells, each with its legend entry.
+    pub lines: Vec<MapLine>,
+    /// A point marked with a ring and a label (e.g. where the largest value is).
+    pub marker: Option<Marker>,
+    /// Legend entries for kinds of cell (e.g. wrinkled, failed), beside those of the lines.
+    pub legend: Vec<LegendCell>,
+}
+
+/// Ticks of an axis: each place and its label.
+pub type Ticks = Vec<(f64, String)>;
+
+/// The finite points of a series.
+type Points = Vec<(f64, f64)>;
+
+/// A value marked on the colour bar with a line and `label`; with `flags_cells`, cells above
+/// it are drawn in [`LIMIT_COLOUR`] (the shear map's cells beyond the locking angle).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Limit {
+    pub value: f64,
+    pub label: String,
+    pub flags_cells: bool,
+}
+
+/// A ring at `at` (plot coordinates) with `label` beside it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Marker {
+    pub at: (f64, f64),
+    pub label: String,
+}
+
+/// Line segments in one colour, e.g. a tool's outline, named in the legend.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MapLine {
+    pub label: String,
+    pub colour: (u8, u8, u8),
+    pub segments: Vec<[(f64, f64); 2]>,
+}
+
+/// A legend entry for a kind of cell: a swatch filled with `fill` (white: `None`), outlined
+/// in black where `outlined`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LegendCell {
+    pub label: String,
+    pub fill: Option<(u8, u8, u8)>,
+    pub outlined: bool,
+}
+
+/// Where the map's plotting area lies in the written picture, to find the pixel of a point
+/// (e.g. the marked maximum).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MapFrame {
+    x: std::ops::Range<f64>,
+    y: std::ops::Range<f64>,
+    /// The plotting area in pixels of the written picture.
+    columns: std::ops::Range<f64>,
+    rows: std::ops::Range<f64>,
+}
+
+impl MapFrame {
+    /// The pixel (column, row) of the point `(x, y)` of the plot.
+    pub fn pixel(&self, (x, y): (f64, f64)) -> (u32, u32) {
+        let u = (x - self.x.start) / (self.x.end - self.x.start);
+        let v = (y - self.y.start) / (self.y.end - self.y.start);
+        let column = self.columns.start + u * (self.columns.end - self.columns.start);
+        // rows grow downwards, y upwards
+        let row = self.rows.end - v * (self.rows.end - self.rows.start);
+        (column.max(0.0) as u32, row.max(0.0) as u32)
+    }
 }
 
 /// Colour of the flagged cells and of the limit's mark.
-const LIMIT_COLOUR: RGBColor = RGBColor(230, 0, 200);
+pub const LIMIT_COLOUR: RGBColor = RGBColor(230, 0, 200);
 /// Colour of the cells without a value.
-const MISSING_COLOUR: RGBColor = RGBColor(170, 170, 170);
+pub const MISSING_COLOUR: RGBColor = RGBColor(170, 170, 170);
 
 /// Blue (0) through cyan, green and yellow to red (1).
 fn colour_scale(t: f64) -> RGBColor {
@@ -602,16 +819,90 @@ fn colour_scale(t: f64) -> RGBColor {
     RGBColor(mix(c0.0, c1.0), mix(c0.1, c1.1), mix(c0.2, c1.2))
 }
 
-/// Writes the map as a PNG of `width` x `height` pixels.
-pub fn write_map_png(path: &Path, map: &MapPlot, width: u32, height: u32) -> Result<(), PlotError> {
+impl MapPlot {
+    /// A map of `values` over `cells` with equal scales, no axes and nothing drawn over it;
+    /// set the other fields to add them.
+    pub fn new(
+        title: impl Into<String>,
+        value_label: impl Into<String>,
+        cells: Vec<Vec<(f64, f64)>>,
+        values: Vec<f64>,
+    ) -> Self {
+        Self {
+            title: title.into(),
+            axes: None,
+            equal_scales: true,
+            value_label: value_label.into(),
+            cells,
+            values,
+            scale: None,
+            limit: None,
+            outlined: Vec::new(),
+            shade: Vec::new(),
+            cell_labels: Vec::new(),
+            ticks: None,
+            lines: Vec::new(),
+            marker: None,
+            legend: Vec::new(),
+        }
+    }
+
+    /// The colour bar's span: [`MapPlot::scale`], or from 0 to the largest finite value or
+    /// the limit, whichever is higher, so that a part far below the limit uses the whole
+    /// scale and one beyond it shows how far. An empty span is widened, so that one value
+    /// still maps to a colour.
+    pub fn colour_range(&self) -> (f64, f64) {
+        let (low, high) = self.scale.unwrap_or_else(|| {
+            let largest = self
+                .values
+                .iter()
+                .copied()
+                .filter(|v| v.is_finite())
+                .fold(0.0, f64::max);
+            (
+                0.0,
+                self.limit
+                    .as_ref()
+                    .map_or(largest, |l| largest.max(l.value)),
+            )
+        });
+        if high > low {
+            (low, high)
+        } else {
+            let half = (1e-3 * low.abs()).max(1e-9);
+            (low - half, low + half)
+        }
+    }
+
+    /// The colour of a cell of `value`: grey without a value, [`LIMIT_COLOUR`] above a limit
+    /// that flags cells, else its place on the colour bar.
+    pub fn colour_of(&self, value: f64) -> RGBColor {
+        let (low, high) = self.colour_range();
+        match &self.limit {
+            _ if !value.is_finite() => MISSING_COLOUR,
+            Some(l) if l.flags_cells && value > l.value => LIMIT_COLOUR,
+            _ => colour_scale((value - low) / (high - low)),
+        }
+    }
+
+    /// The cell's colour darkened by its shade.
+    fn shaded_colour(&self, cell: usize) -> RGBColor {
+        let RGBColor(r, g, b) = self.colour_of(self.values[cell]);
+        let shade = self.shade.get(cell).copied().unwrap_or(1.0).clamp(0.0, 1.0);
+        let dim = |c: u8| (f64::from(c) * shade).round() as u8;
+        RGBColor(dim(r), dim(g), dim(b))
+    }
+}
+
+/// Writes the map as a PNG of `width` x `height` pixels; returns where its plotting area lies.
+pub fn write_map_png(
+    path: &Path,
+    map: &MapPlot,
+    width: u32,
+    height: u32,
+) -> Result<MapFrame, PlotError> {
     let title = map.title.clone();
-    let finite: Vec<f64> = map
-        .values
-        .iter()
-        .copied()
-        .filter(|v| v.is_finite())
-        .collect();
-    if map.cells.is_empty() || finite.is_empty() {
+    if map.cells.is_empty() || !map.values.iter().any(|v| v.is_finite()) {
         return Err(PlotError::Empty { title });
     }
     if !((MIN_WIDTH..=MAX_SIDE).contains(&width) && (MIN_HEIGHT..=MAX_SIDE).contains(&height)) {
@@ -624,37 +915,71 @@ pub fn write_map_png(path: &Path, map: &MapPlot, width: u32, height: u32) -> Res
     let font = embedded_font()?;
     let (fine_width, fine_height) = (SUPERSAMPLE * width, SUPERSAMPLE * height);
     let mut fine = vec![255u8; 3 * fine_width as usize * fine_height as usize];
-    {
+    let frame = {
         let bitmap = BitMapBackend::with_buffer(&mut fine, (fine_width, fine_height));
         let root = PlotBackend { bitmap, font }.into_drawing_area();
-        draw_map(&root, map, &finite).map_err(|message| PlotError::Draw { title, message })?;
-    }
+        draw_map(&root, map).map_err(|message| PlotError::Draw { title, message })?
+    };
     let rgb = downsample(&fine, fine_width as usize, SUPERSAMPLE as usize);
-    encode_png(path, &rgb, width, height)
+    encode_png(path, &rgb, width, height)?;
+    Ok(frame)
 }
 
-/// The map on the left (equal scales on x and y), the colour bar on the right.
-fn draw_map(
-    root: &DrawingArea<PlotBackend, Shift>,
-    map: &MapPlot,
-    finite: &[f64],
-) -> Result<(), String> {
-    let width = root.dim_in_pixel().0;
-    let design = DesignScale::of(root);
-    let (px, font) = (|d: f64| design.px(d), |d: f64| design.font(d));
-    root.fill(&WHITE).map_err(|e| e.to_string())?;
-    let top = finite.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    let top = map.limit.map_or(top, |l| top.max(l)).max(1e-12);
-    let (left, right) = root.split_horizontally(width * 4 / 5);
+/// An axis of a map: its range and ticks at given places with their labels.
+struct MapAxis {
+    range: std::ops::Range<f64>,
+    ticks: Vec<(f64, String)>,
+}
 
-    let points = map.cells.iter().flatten();
+impl MapAxis {
+    /// Ticks at round numbers, about `target` of them, labelled as [`Axis`] labels them.
+    fn round(range: std::ops::Range<f64>, target: f64) -> Self {
+        let axis = Axis::new(range.clone(), target);
+        let ticks = axis.major.iter().map(|&v| (v, axis.label(v))).collect();
+        Self { range, ticks }
+    }
+}
+
+impl Ranged for MapAxis {
+    type FormatOption = NoDefaultFormatting;
+    type ValueType = f64;
+
+    fn map(&self, value: &f64, limit: (i32, i32)) -> i32 {
+        let (start, end) = (self.range.start / 2.0, self.range.end / 2.0);
+        let fraction = (value / 2.0 - start) / (end - start);
+        limit.0 + (fraction * f64::from(limit.1 - limit.0)).round() as i32
+    }
+
+    fn key_points<Hint: KeyPointHint>(&self, hint: Hint) -> Vec<f64> {
+        if hint.weight().allow_light_points() {
+            Vec::new()
+        } else {
+            self.ticks.iter().map(|t| t.0).collect()
+        }
+    }
+
+    fn range(&self) -> std::ops::Range<f64> {
+        self.range.clone()
+    }
+}
+
+impl ValueFormatter<f64> for MapAxis {
+    fn format_ext(&self, value: &f64) -> String {
+        self.ticks
+            .iter()
+            .min_by(|a, b| (a.0 - value).abs().total_cmp(&(b.0 - value).abs()))
+            .map_or_else(String::new, |t| t.1.clone())
+    }
+}
+
+/// The box around the cells and lines, padded to the drawing area's proportions where the
+/// scales are equal.
+fn map_extent(map: &MapPlot, aspect: f64) -> (std::ops::Range<f64>, std::ops::Range<f64>) {
+    let lines = map.lines.iter().flat_map(|l| l.segments.iter().flatten());
     let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
-    for &(x, y) in points {
+    for &(x, y) in map.cells.iter().flatten().chain(lines) {
         (x0, x1, y0, y1) = (x0.min(x), x1.max(x), y0.min(y), y1.max(y));
     }
-    // equal scales: pad the shorter side of the box to the drawing area's proportions
-    let (w, h) = left.dim_in_pixel();
-    let aspect = f64::from(w) / f64::from(h);
     let (cx, cy, mut sx, mut sy) = (0.5 * (x0 + x1), 0.5 * (y0 + y1), x1 - x0, y1 - y0);
     if map.equal_scales {
         if sx / sy < aspect {
@@ -663,81 +988,296 @@ fn draw_map(
             sy = sx / aspect;
         }
     }
-    let margin = if map.equal_scales { 0.55 } else { 0.5 };
+    // a part gets a margin around it; a map over parameters ends at its cells
+    let margin = if map.equal_scales { 0.53 } else { 0.5 };
     let (sx, sy) = (margin * sx.max(1e-12), margin * sy.max(1e-12));
-    let mut chart = ChartBuilder::on(&left)
-        .caption(&map.title, font(22.0))
-        .margin(px(12.0))
-        .x_label_area_size(px(40.0))
-        .y_label_area_size(px(56.0))
-        .build_cartesian_2d(cx - sx..cx + sx, cy - sy..cy + sy)
-        .map_err(|e| e.to_string())?;
-    chart
-        .configure_mesh()
-        .x_desc(&map.axes.0)
-        .y_desc(&map.axes.1)
-        .axis_desc_style(font(16.0))
-        .label_style(font(13.0))
-        .disable_mesh()
-        .draw()
-        .map_err(|e| e.to_string())?;
-    let fill = |v: f64| match map.limit {
-        _ if !v.is_finite() => MISSING_COLOUR,
-        Some(l) if v > l => LIMIT_COLOUR,
-        _ => colour_scale(v / top),
+    (cx - sx..cx + sx, cy - sy..cy + sy)
+}
+
+/// The entries of the legend strip: the lines', then the kinds of cell.
+fn legend_entries(map: &MapPlot) -> Vec<(String, Swatch)> {
+    let lines = map
+        .lines
+        .iter()
+        .map(|l| (l.label.clone(), Swatch::Line(l.colour)));
+    let cells = map.legend.iter().map(|c| {
+        let fill = c.fill.map_or(WHITE, |(r, g, b)| RGBColor(r, g, b));
+        (c.label.clone(), Swatch::Cell(fill, c.outlined))
+    });
+    lines.chain(cells).collect()
+}
+
+enum Swatch {
+    Line((u8, u8, u8)),
+    Cell(RGBColor, bool),
+}
+
+/// The map on the left (its legend in a strip under it), the colour bar on the right.
+fn draw_map(root: &DrawingArea<PlotBackend, Shift>, map: &MapPlot) -> Result<MapFrame, String> {
+    let text = |e: DrawingAreaErrorKind<_>| e.to_string();
+    let width = root.dim_in_pixel().0;
+    let design = DesignScale::of(root);
+    let (px, font) = (|d: f64| design.px(d), |d: f64| design.font(d));
+    root.fill(&WHITE).map_err(text)?;
+    let body = titled(root, &map.title, &design)?;
+    let (left, right) = body.split_horizontally(width * 4 / 5);
+    let legend = legend_entries(map);
+    let (left, strip) = if legend.is_empty() {
+        (left, None)
+    } else {
+        let (top, strip) = left.split_vertically(left.dim_in_pixel().1 - px(36.0));
+        (top, Some(strip))
     };
+    let (w, h) = left.dim_in_pixel();
+    let (x_range, y_range) = map_extent(map, f64::from(w) / f64::from(h));
+    let (x_axis, y_axis) = match &map.ticks {
+        Some((x, y)) => (
+            MapAxis {
+                range: x_range,
+                ticks: x.clone(),
+            },
+            MapAxis {
+                range: y_range,
+                ticks: y.clone(),
+            },
+        ),
+        None => (MapAxis::round(x_range, 8.0), MapAxis::round(y_range, 6.0)),
+    };
+    let axis_room = |size: f64| if map.axes.is_some() { px(size) } else { 0 };
+    let mut chart = ChartBuilder::on(&left)
+        .margin(px(12.0))
+        .x_label_area_size(axis_room(44.0))
+        .y_label_area_size(axis_room(64.0))
+        .build_cartesian_2d(x_axis, y_axis)
+        .map_err(text)?;
+    if let Some((x_label, y_label)) = &map.axes {
+        chart
+            .configure_mesh()
+            .x_desc(x_label)
+            .y_desc(y_label)
+            .axis_desc_style(font(16.0))
+            .label_style(font(13.0))
+            .disable_mesh()
+            .draw()
+            .map_err(text)?;
+    }
     chart
         .draw_series(
             map.cells
                 .iter()
-                .zip(&map.values)
-                .map(|(t, &v)| Polygon::new(t.clone(), fill(v).filled())),
+                .enumerate()
+                .map(|(k, c)| Polygon::new(c.clone(), map.shaded_colour(k).filled())),
         )
-        .map_err(|e| e.to_string())?;
+        .map_err(text)?;
     chart
         .draw_series(
             map.cells
                 .iter()
                 .zip(&map.outlined)
                 .filter(|(_, &outlined)| outlined)
-                .map(|(t, _)| {
-                    let mut ring = t.clone();
-                    ring.extend(t.first().copied());
+                .map(|(c, _)| {
+                    let mut ring = c.clone();
+                    ring.extend(c.first().copied());
                     PathElement::new(ring, BLACK.stroke_width(px(3.0)))
                 }),
         )
-        .map_err(|e| e.to_string())?;
+        .map_err(text)?;
+    draw_cell_labels(&mut chart, map, font(14.0))?;
+    for line in &map.lines {
+        let (r, g, b) = line.colour;
+        let style = RGBColor(r, g, b).stroke_width(px(2.0));
+        chart
+            .draw_series(
+                line.segments
+                    .iter()
+                    .map(|s| PathElement::new(s.to_vec(), style)),
+            )
+            .map_err(text)?;
+    }
+    if let Some(marker) = &map.marker {
+        draw_marker(
+            root,
+            chart.backend_coord(&marker.at),
+            &marker.label,
+            &design,
+        )?;
+    }
+    let (columns, rows) = chart.plotting_area().get_pixel_range();
+    let fine = |r: std::ops::Range<i32>| {
+        f64::from(r.start) / f64::from(SUPERSAMPLE)..f64::from(r.end) / f64::from(SUPERSAMPLE)
+    };
+    let frame = MapFrame {
+        x: chart.x_range(),
+        y: chart.y_range(),
+        columns: fine(columns),
+        rows: fine(rows),
+    };
+    if let Some(strip) = strip {
+        draw_legend(&strip, &legend, &design)?;
+    }
+    draw_colour_bar(&right, map, &design)?;
+    Ok(frame)
+}
 
-    let mut bar = ChartBuilder::on(&right)
+/// Each cell's label at its centre, black on light colours and white on dark ones.
+fn draw_cell_labels(
+    chart: &mut ChartContext<PlotBackend, Cartesian2d<MapAxis, MapAxis>>,
+    map: &MapPlot,
+    font: (&'static str, f64),
+) -> Result<(), String> {
+    let labels = map.cells.iter().zip(&map.cell_labels).enumerate();
+    let centred = Pos::new(HPos::Center, VPos::Center);
+    chart
+        .draw_series(labels.map(|(k, (cell, label))| {
+            let n = cell.len().max(1) as f64;
+            let (x, y) = cell
+                .iter()
+                .fold((0.0, 0.0), |(x, y), p| (x + p.0 / n, y + p.1 / n));
+            let RGBColor(r, g, b) = map.shaded_colour(k);
+            // perceived brightness (ITU-R BT.601 weights)
+            let light = 0.299 * f64::from(r) + 0.587 * f64::from(g) + 0.114 * f64::from(b) > 140.0;
+            let colour = if light { &BLACK } else { &WHITE };
+            Text::new(
+                label.clone(),
+                (x, y),
+                TextStyle::from(font.into_font()).color(colour).pos(centred),
+            )
+        }))
+        .map(|_| ())
+        .map_err(|e| e.to_string())
+}
+
+/// A ring around the marked point and its label on a white box beside it, in pixels.
+fn draw_marker(
+    root: &DrawingArea<PlotBackend, Shift>,
+    (x, y): (i32, i32),
+    label: &str,
+    design: &DesignScale,
+) -> Result<(), String> {
+    let text = |e: DrawingAreaErrorKind<_>| e.to_string();
+    let radius = design.px(9.0) as i32;
+    root.draw(&Circle::new(
+        (x, y),
+        radius,
+        BLACK.stroke_width(design.px(2.5)),
+    ))
+    .map_err(text)?;
+    let style =
+        TextStyle::from(design.font(16.0).into_font()).pos(Pos::new(HPos::Left, VPos::Center));
+    let (w, h) = root.estimate_text_size(label, &style).map_err(text)?;
+    let (w, h) = (w as i32, h as i32);
+    // the label up and to the right of the ring, on a box that keeps it legible over colours
+    let (left, middle) = (x + radius + design.px(4.0) as i32, y - radius - h / 2);
+    let pad = design.px(3.0) as i32;
+    root.draw(&Rectangle::new(
+        [
+            (left - pad, middle - h / 2 - pad),
+            (left + w + pad, middle + h / 2 + pad),
+        ],
+        ShapeStyle::from(&WHITE.mix(0.85)).filled(),
+    ))
+    .map_err(text)?;
+    root.draw(&Rectangle::new(
+        [
+            (left - pad, middle - h / 2 - pad),
+            (left + w + pad, middle + h / 2 + pad),
+        ],
+        BLACK.stroke_width(1),
+    ))
+    .map_err(text)?;
+    root.draw(&Text::new(label.to_string(), (left, middle), style))
+        .map_err(text)
+}
+
+/// The legend strip: a swatch and a label per entry, in a row.
+fn draw_legend(
+    strip: &DrawingArea<PlotBackend, Shift>,
+    entries: &[(String, Swatch)],
+    design: &DesignScale,
+) -> Result<(), String> {
+    let text = |e: DrawingAreaErrorKind<_>| e.to_string();
+    let style =
+        TextStyle::from(design.font(14.0).into_font()).pos(Pos::new(HPos::Left, VPos::Center));
+    let (swatch_width, gap) = (design.px(26.0) as i32, design.px(8.0) as i32);
+    let half = design.px(7.0) as i32;
+    let middle = strip.dim_in_pixel().1 as i32 / 2;
+    let mut x = design.px(16.0) as i32;
+    for (label, swatch) in entries {
+        let (x1, top, bottom) = (x + swatch_width, middle - half, middle + half);
+        match swatch {
+            Swatch::Line((r, g, b)) => strip.draw(&PathElement::new(
+                vec![(x, middle), (x1, middle)],
+                RGBColor(*r, *g, *b).stroke_width(design.px(2.5)),
+            )),
+            Swatch::Cell(fill, outlined) => {
+                strip
+                    .draw(&Rectangle::new([(x, top), (x1, bottom)], fill.filled()))
+                    .map_err(text)?;
+                let edge = if *outlined {
+                    BLACK.stroke_width(design.px(3.0))
+                } else {
+                    RGBColor(120, 120, 120).stroke_width(1)
+                };
+                strip.draw(&Rectangle::new([(x, top), (x1, bottom)], edge))
+            }
+        }
+        .map_err(text)?;
+        let label_x = x1 + gap;
+        strip
+            .draw(&Text::new(label.clone(), (label_x, middle), style.clone()))
+            .map_err(text)?;
+        let (w, _) = strip.estimate_text_size(label, &style).map_err(text)?;
+        x = label_x + w as i32 + 3 * gap;
+    }
+    Ok(())
+}
+
+/// The colour bar from the bottom to the top of [`MapPlot::colour_range`], the limit marked
+/// by a line across it and its label beside it.
+fn draw_colour_bar(
+    area: &DrawingArea<PlotBackend, Shift>,
+    map: &MapPlot,
+    design: &DesignScale,
+) -> Result<(), String> {
+    let text = |e: DrawingAreaErrorKind<_>| e.to_string();
+    let (px, font) = (|d: f64| design.px(d), |d: f64| design.font(d));
+    let (low, high) = map.colour_range();
+    let mut bar = ChartBuilder::on(area)
         .margin(px(12.0))
         .margin_top(px(48.0))
-        .y_label_area_size(px(48.0))
+        .y_label_area_size(px(52.0))
         .x_label_area_size(px(40.0))
-        .build_cartesian_2d(0.0..1.0, 0.0..top)
-        .map_err(|e| e.to_string())?;
+        .build_cartesian_2d(0.0..1.0, MapAxis::round(low..high, 8.0))
+        .map_err(text)?;
     bar.configure_mesh()
         .disable_mesh()
         .disable_x_axis()
         .y_desc(&map.value_label)
-        .axis_desc_style(font(16.0))
+        .axis_desc_style(font(15.0))
         .label_style(font(13.0))
         .draw()
-        .map_err(|e| e.to_string())?;
-    let steps = 100;
+        .map_err(text)?;
+    // the bar on the left of its area, the limit's label on the right
+    let (bar_width, steps) = (0.4, 200);
     bar.draw_series((0..steps).map(|k| {
-        let (a, b) = (
-            top * k as f64 / steps as f64,
-            top * (k + 1) as f64 / steps as f64,
-        );
-        Rectangle::new([(0.0, a), (1.0, b)], fill(0.5 * (a + b)).filled())
+        let at = |k: i32| low + (high - low) * f64::from(k) / f64::from(steps);
+        let colour = map.colour_of(0.5 * (at(k) + at(k + 1)));
+        Rectangle::new([(0.0, at(k)), (bar_width, at(k + 1))], colour.filled())
     }))
-    .map_err(|e| e.to_string())?;
-    if let Some(l) = map.limit {
-        bar.draw_series(std::iter::once(PathElement::new(
-            vec![(0.0, l), (1.0, l)],
+    .map_err(text)?;
+    if let Some(limit) = &map.limit {
+        bar.draw_series([PathElement::new(
+            vec![(0.0, limit.value), (bar_width + 0.08, limit.value)],
             BLACK.stroke_width(px(2.0)),
-        )))
-        .map_err(|e| e.to_string())?;
+        )])
+        .map_err(text)?;
+        let style = TextStyle::from(font(13.0).into_font()).pos(Pos::new(HPos::Left, VPos::Center));
+        bar.draw_series([Text::new(
+            limit.label.clone(),
+            (bar_width + 0.1, limit.value),
+            style,
+        )])
+        .map_err(text)?;
     }
     Ok(())
 }
@@ -775,6 +1315,9 @@ fn encode_png(path: &Path, rgb: &[u8], width: u32, height: u32) -> Result<(), Pl
     let mut encoder = png::Encoder::new(&mut bytes, width, height);
     encoder.set_color(png::ColorType::Rgb);
     encoder.set_depth(png::BitDepth::Eight);
+    // plots are large flat areas, which the fast encoder packs nearly as well in a fraction of
+    // the time: every run writes several (docs/performance.md, "Pictures")
+    encoder.set_compression(png::Compression::Fast);
     let mut writer = encoder.write_header().map_err(encode_error)?;
     writer.write_image_data(rgb).map_err(encode_error)?;
     writer.finish().map_err(encode_error)?;
@@ -1170,6 +1713,126 @@ mod tests {
             let e = write_png(&path, &two_series(), w, h).unwrap_err();
             assert!(matches!(e, PlotError::Size { .. }), "{w} x {h}: {e:?}");
         }
+    }
+
+    fn square_map(values: Vec<f64>, limit: Option<f64>) -> MapPlot {
+        let cells = (0..values.len())
+            .map(|k| {
+                let x = 10.0 * k as f64;
+                vec![(x, 0.0), (x + 10.0, 0.0), (x + 10.0, 10.0), (x, 10.0)]
+            })
+            .collect();
+        let mut map = MapPlot::new("Squares", "value (°)", cells, values);
+        map.limit = limit.map(|value| Limit {
+            value,
+            label: format!("locking {value}°"),
+            flags_cells: true,
+        });
+        map
+    }
+
+    /// The scale runs from 0 to the locking angle or the largest value, whichever is higher,
+    /// or over a span given; one value still gets a span.
+    #[test]
+    fn the_colour_scale_runs_to_the_limit_or_the_largest_value() {
+        assert_eq!(
+            square_map(vec![3.0, 27.7], Some(45.0)).colour_range(),
+            (0.0, 45.0)
+        );
+        assert_eq!(
+            square_map(vec![3.0, 52.5, f64::NAN], Some(45.0)).colour_range(),
+            (0.0, 52.5)
+        );
+        assert_eq!(
+            square_map(vec![3.0, 27.7], None).colour_range(),
+            (0.0, 27.7)
+        );
+        let mut spanned = square_map(vec![-2.0, 5.0], None);
+        spanned.scale = Some((-2.0, 5.0));
+        assert_eq!(spanned.colour_range(), (-2.0, 5.0));
+        let (lo, hi) = square_map(vec![0.0, 0.0], None).colour_range();
+        assert!(lo < 0.0 && hi > 0.0, "{lo} {hi}");
+    }
+
+    /// Cells beyond a flagging limit are magenta, cells without a value grey, the rest on
+    /// the scale: its ends blue and red.
+    #[test]
+    fn cells_take_the_colour_of_their_place_on_the_scale() {
+        let map = square_map(vec![0.0, 45.0], Some(45.0));
+        assert_eq!(map.colour_of(50.0), LIMIT_COLOUR);
+        assert_eq!(map.colour_of(f64::NAN), MISSING_COLOUR);
+        assert_eq!(map.colour_of(0.0), RGBColor(49, 54, 149));
+        assert_eq!(map.colour_of(45.0), RGBColor(200, 30, 30));
+        assert_eq!(map.colour_of(22.5), RGBColor(120, 200, 120));
+        let mut marked = map.clone();
+        marked.limit.as_mut().unwrap().flags_cells = false;
+        assert_eq!(marked.colour_of(50.0), RGBColor(200, 30, 30));
+    }
+
+    /// The pixel the frame gives for a cell's centre has the cell's colour, lines, a marker,
+    /// a legend and printed values drawn beside it.
+    #[test]
+    fn the_frame_finds_a_cells_pixel_and_its_colour() {
+        let path = temp_folder("map").join("map.png");
+        let mut map = square_map(vec![5.0, 20.0, 40.0, 50.0], Some(45.0));
+        map.axes = Some(("x (mm)".into(), "y (mm)".into()));
+        map.cell_labels = vec!["5".into(), "20".into(), "40".into(), "50".into()];
+        map.marker = Some(Marker {
+            at: (25.0, 5.0),
+            label: "max 20°".into(),
+        });
+        map.lines = vec![MapLine {
+            label: "die opening".into(),
+            colour: (120, 60, 0),
+            segments: vec![[(0.0, -2.0), (40.0, -2.0)]],
+        }];
+        map.legend = vec![LegendCell {
+            label: "failed".into(),
+            fill: Some((170, 170, 170)),
+            outlined: false,
+        }];
+        let frame = write_map_png(&path, &map, 800, 500).unwrap();
+        let (info, pixels) = decode(&path);
+        let at = |(x, y): (f64, f64)| {
+            let (column, row) = frame.pixel((x, y));
+            let i = 3 * (row * info.width + column) as usize;
+            RGBColor(pixels[i], pixels[i + 1], pixels[i + 2])
+        };
+        // off the printed value, inside each square
+        assert_eq!(at((2.0, 2.0)), map.colour_of(5.0));
+        assert_eq!(at((12.0, 8.0)), map.colour_of(20.0));
+        assert_eq!(at((22.0, 2.0)), map.colour_of(40.0));
+        assert_eq!(at((38.0, 8.0)), LIMIT_COLOUR);
+    }
+
+    /// A plot with a second axis draws the right axis's series in the next palette colour.
+    #[test]
+    fn a_twin_plot_draws_both_axes_series() {
+        let path = temp_folder("twin").join("twin.png");
+        let u: Vec<f64> = (0..=50).map(f64::from).collect();
+        let twin = TwinPlot {
+            plot: plot_of(vec![Series::new(
+                "punch force",
+                u.iter().map(|&u| (u, 2.0 * u)).collect(),
+                LineStyle::Solid,
+            )]),
+            right_label: "draw-in (mm)".into(),
+            right: vec![Series::new(
+                "draw-in",
+                u.iter().map(|&u| (u, 0.01 * u * u)).collect(),
+                LineStyle::Solid,
+            )],
+        };
+        write_twin_png(&path, &twin, 900, 600).unwrap();
+        let (_, pixels) = decode(&path);
+        let count = |c: RGBColor| {
+            pixels
+                .chunks_exact(3)
+                .filter(|p| p == &[c.0, c.1, c.2])
+                .count()
+        };
+        assert!(count(PALETTE[0]) > 300, "left series");
+        assert!(count(PALETTE[1]) > 300, "right series");
     }
 
     #[test]

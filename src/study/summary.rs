@@ -7,7 +7,10 @@ use super::file::{Case, Study};
 use super::run::{finished, CaseResult};
 use crate::forming::run::{RESULT_COLUMNS, RESULT_CSV};
 use crate::io::output_folder::ProductFiles;
-use crate::io::plot::{write_map_png, write_png, LinePlot, LineStyle, MapPlot, Series};
+use crate::io::plot::{
+    write_map_png, write_png, LegendCell, LinePlot, LineStyle, MapPlot, Series, MISSING_COLOUR,
+};
+use plotters::style::RGBColor;
 use std::path::{Path, PathBuf};
 
 /// The run's final measures a summary row carries: the columns of its `forming-result.csv`
@@ -227,8 +230,9 @@ fn number(v: &toml::Value) -> Option<f64> {
     }
 }
 
-/// Cells centred on the values of the first two parameters, each reaching halfway to its
-/// neighbours.
+/// A cell per case at the places of its first two parameters among their values (equal
+/// cells, so that the map ends at the data and uneven steps stay legible), each labelled with
+/// its value, the axes ticked at the parameters' values and titled with their names and units.
 fn heat_map(
     study: &Study,
     rows: &[&Row],
@@ -243,18 +247,26 @@ fn heat_map(
             .filter_map(|v| number(&v))
             .collect();
         v.sort_by(f64::total_cmp);
+        v.dedup();
         v
     };
     let (xs, ys) = (axis(0), axis(1));
+    let place = |values: &[f64], v: f64| values.partition_point(|x| *x < v) as f64;
     let mut cells = Vec::new();
     let mut values = Vec::new();
     let mut outlined = Vec::new();
+    let mut cell_labels = Vec::new();
     for r in rows {
         let (Some(x), Some(y)) = (number(&r.case.values[0]), number(&r.case.values[1])) else {
             continue;
         };
-        let ((x0, x1), (y0, y1)) = (cell_span(&xs, x), cell_span(&ys, y));
-        cells.push(vec![(x0, y0), (x1, y0), (x1, y1), (x0, y1)]);
+        let (i, j) = (place(&xs, x), place(&ys, y));
+        cells.push(vec![
+            (i - 0.5, j - 0.5),
+            (i + 0.5, j - 0.5),
+            (i + 0.5, j + 0.5),
+            (i - 0.5, j + 0.5),
+        ]);
         let value = if r.status == "done" {
             r.measure(measure).unwrap_or(f64::NAN)
         } else {
@@ -262,6 +274,7 @@ fn heat_map(
         };
         values.push(value);
         outlined.push(flag.is_some_and(|f| value > f));
+        cell_labels.push(cell_text(value, &r.status));
     }
     let rest = if study
         .parameters
@@ -273,36 +286,81 @@ fn heat_map(
     } else {
         ""
     };
-    MapPlot {
-        title: format!("Study: {label}{rest}"),
-        axes: (
-            study.parameters[0].key.clone(),
-            study.parameters[1].key.clone(),
-        ),
-        equal_scales: false,
-        value_label: match flag {
-            Some(f) => format!("{label}; wrinkled (above {f:.3}) outlined, failed grey"),
-            None => format!("{label}; failed grey"),
-        },
-        cells,
-        values,
-        limit: None,
-        outlined,
+    let ticks = |values: &[f64]| -> Vec<(f64, String)> {
+        values
+            .iter()
+            .enumerate()
+            .map(|(k, v)| (k as f64, format!("{v}")))
+            .collect()
+    };
+    let mut map = MapPlot::new(format!("Study: {label}{rest}"), label, cells, values);
+    map.axes = Some((
+        parameter_title(&study.parameters[0].key),
+        parameter_title(&study.parameters[1].key),
+    ));
+    map.equal_scales = false;
+    map.ticks = Some((ticks(&xs), ticks(&ys)));
+    map.outlined = outlined;
+    map.cell_labels = cell_labels;
+    if let Some(f) = flag {
+        map.legend.push(LegendCell {
+            label: format!("wrinkled: waviness above {f} mm"),
+            fill: None,
+            outlined: true,
+        });
     }
+    let RGBColor(r, g, b) = MISSING_COLOUR;
+    map.legend.push(LegendCell {
+        label: "failed or not run".into(),
+        fill: Some((r, g, b)),
+        outlined: false,
+    });
+    map
 }
 
-/// The extent of the cell of `v` among the increasing `values`: halfway to each neighbour, an
-/// end cell as wide on its open side as on the other; 1 either side of a lone value.
-fn cell_span(values: &[f64], v: f64) -> (f64, f64) {
-    let i = values.partition_point(|x| *x < v);
-    let gap = |a: usize| 0.5 * (values[a + 1] - values[a]);
-    match values.len() {
-        0 | 1 => (v - 1.0, v + 1.0),
-        n => {
-            let left = gap(i.max(1) - 1);
-            let right = gap(i.min(n - 2));
-            (v - left, v + right)
-        }
+/// A heat map cell's text: its value to three significant digits (below 0.01 in scientific
+/// notation, so that the cell stays narrow), or why it has none.
+fn cell_text(value: f64, status: &str) -> String {
+    if !value.is_finite() {
+        return if status == "done" { "-" } else { status }.to_string();
+    }
+    if value == 0.0 {
+        return "0".into();
+    }
+    if value.abs() < 0.01 {
+        return format!("{value:.1e}");
+    }
+    let digits = 2 - value.abs().log10().floor().clamp(-2.0, 2.0) as i32;
+    format!("{value:.*}", digits.max(0) as usize)
+}
+
+/// A scenario key as an axis title: its name and unit (docs/forming.md, "Scenario file"), or
+/// the key itself where it is not one a study usually varies.
+pub fn parameter_title(key: &str) -> String {
+    let known = [
+        ("process.temperature", "temperature", "°C"),
+        ("process.blank_holder_force", "blank-holder force", "N"),
+        ("process.blank_holder_gap", "blank-holder gap", "mm"),
+        ("process.punch_speed", "punch speed", "mm/s"),
+        ("process.stroke", "stroke", "mm"),
+        ("process.time_scaling", "time scaling", ""),
+        ("process.friction.punch", "friction blank-punch", ""),
+        ("process.friction.die", "friction blank-die", ""),
+        ("process.friction.holder", "friction blank-holder", ""),
+        ("blank.element_size", "element size", "mm"),
+        ("blank.width", "blank width", "mm"),
+        ("blank.length", "blank length", "mm"),
+        ("blank.ply_angle", "ply angle", "°"),
+        ("blank.interply.friction", "friction between plies", ""),
+        ("tools.punch_radius", "punch radius", "mm"),
+        ("tools.die_opening_radius", "die opening radius", "mm"),
+        ("tools.die_fillet_radius", "die fillet radius", "mm"),
+        ("tools.holder_inner_radius", "holder inner radius", "mm"),
+    ];
+    match known.iter().find(|(k, _, _)| *k == key) {
+        Some((_, name, "")) => format!("{name} ({key})"),
+        Some((_, name, unit)) => format!("{name} ({unit})"),
+        None => key.to_string(),
     }
 }
 
@@ -316,7 +374,7 @@ fn line_chart(study: &Study, rows: &[&Row], measure: &str, label: &str) -> LineP
     points.sort_by(|a, b| a.0.total_cmp(&b.0));
     LinePlot {
         title: format!("Study: {label}"),
-        x_label: study.parameters[0].key.clone(),
+        x_label: parameter_title(&study.parameters[0].key),
         y_label: label.into(),
         series: vec![Series::new("cases done", points, LineStyle::Solid)],
     }
@@ -326,15 +384,31 @@ fn line_chart(study: &Study, rows: &[&Row], measure: &str, label: &str) -> LineP
 mod tests {
     use super::*;
 
-    /// Cells reach halfway to their neighbours; end cells mirror their inner half; a lone
-    /// value gets a cell of width 2.
+    /// Values print to three significant digits; a cell without one says why.
     #[test]
-    fn heat_map_cells_reach_halfway_to_their_neighbours() {
-        let values = [0.0, 100.0, 300.0];
-        assert_eq!(cell_span(&values, 0.0), (-50.0, 50.0));
-        assert_eq!(cell_span(&values, 100.0), (50.0, 200.0));
-        assert_eq!(cell_span(&values, 300.0), (200.0, 400.0));
-        assert_eq!(cell_span(&[280.0], 280.0), (279.0, 281.0));
+    fn heat_map_cells_print_their_values() {
+        assert_eq!(cell_text(27.73, "done"), "27.7");
+        assert_eq!(cell_text(0.05234, "done"), "0.0523");
+        assert_eq!(cell_text(0.0, "done"), "0");
+        assert_eq!(cell_text(2.1e-6, "done"), "2.1e-6");
+        assert_eq!(cell_text(140.2, "done"), "140");
+        assert_eq!(cell_text(f64::NAN, "failed"), "failed");
+        assert_eq!(cell_text(f64::NAN, "done"), "-");
+    }
+
+    /// The parameters a study varies are titled with their names and units.
+    #[test]
+    fn parameters_are_titled_with_names_and_units() {
+        assert_eq!(parameter_title("process.temperature"), "temperature (°C)");
+        assert_eq!(
+            parameter_title("process.blank_holder_force"),
+            "blank-holder force (N)"
+        );
+        assert_eq!(
+            parameter_title("process.friction.die"),
+            "friction blank-die (process.friction.die)"
+        );
+        assert_eq!(parameter_title("output.frames"), "output.frames");
     }
 
     /// A quoted first field keeps its commas.
