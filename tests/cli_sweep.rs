@@ -290,8 +290,8 @@ fn the_example_study_runs_in_reduced_form() {
             &format!("base = \"{}\"", base.display()),
         )
         .replace(
-            "[parameters]\n",
-            "[parameters]\nblank.element_size = [10.0]\nprocess.stroke = [5.0]\n",
+            "blank.element_size = [8.0]",
+            "blank.element_size = [10.0]\nprocess.stroke = [5.0]",
         )
         .replace(
             "folder = \"study-temperature-bhf-results\"",
