@@ -398,7 +398,14 @@ fn the_double_dome_example() {
 
 #[test]
 fn the_quarter_example() {
-    let (result, _) = forming("quarter", &["run", "examples/hemisphere-quarter.toml"]);
+    let (result, stdout) = forming("quarter", &["run", "examples/hemisphere-quarter.toml"]);
+    // its coarse tutorial mesh is said in the summary, as the guide's "Mesh size" says
+    assert!(
+        stdout
+            .lines()
+            .any(|l| l.starts_with("note") && l.contains("coarse tutorial mesh (8 mm)")),
+        "{stdout}"
+    );
     compare(&[
         (
             "quarter.peak_punch_force",
