@@ -94,12 +94,16 @@ fn forming(args: &Args) -> anyhow::Result<()> {
     if result.records.is_empty() {
         return result.outcome.map(|_| ()).map_err(anyhow::Error::from);
     }
-    let mut files = vec![csv, write_result_row(&dir, &scenario, &forming, &result)?];
-    let pictures = write_pictures(&dir, &scenario, &forming, &result)?;
-    files.extend(pictures.into_iter().map(|p| p.path));
-    if let Some(state) = result.formed_state() {
-        files.extend(write_formed_blank(&dir, &forming.model, state)?);
-    }
+    let files = match write_final_results(&dir, &scenario, &forming, &result) {
+        Ok(files) => files,
+        // a run stopped by a result it could not write (a full disk) says so, not what failed
+        // after it for the same reason
+        Err(later) => match result.outcome {
+            Ok(_) => return Err(later),
+            Err(stopped) => return Err(anyhow::Error::from(stopped)),
+        },
+    };
+    let mut files = std::iter::once(csv).chain(files).collect::<Vec<_>>();
     if scenario.output.frames > 0 {
         files.push(dir.join(format!("{SERIES}.pvd")));
     }
@@ -108,6 +112,23 @@ fn forming(args: &Args) -> anyhow::Result<()> {
         eprintln!("{advice}");
     }
     result.outcome.map(|_| ()).map_err(anyhow::Error::from)
+}
+
+/// What a run writes once it has stopped: the result row, the pictures and the formed blank;
+/// the files written.
+fn write_final_results(
+    dir: &Path,
+    scenario: &Scenario,
+    forming: &FormingModel,
+    result: &FormingRun,
+) -> anyhow::Result<Vec<PathBuf>> {
+    let mut files = vec![write_result_row(dir, scenario, forming, result)?];
+    let pictures = write_pictures(dir, scenario, forming, result)?;
+    files.extend(pictures.into_iter().map(|p| p.path));
+    if let Some(state) = result.formed_state() {
+        files.extend(write_formed_blank(dir, &forming.model, state)?);
+    }
+    Ok(files)
 }
 
 /// `time` is process time, the solver's `solver_time` times `process.time_scaling`, as the

@@ -1316,12 +1316,13 @@ fn encode_png(path: &Path, rgb: &[u8], width: u32, height: u32) -> Result<(), Pl
     encoder.set_color(png::ColorType::Rgb);
     encoder.set_depth(png::BitDepth::Eight);
     // plots are large flat areas, which the fast encoder packs nearly as well in a fraction of
-    // the time: every run writes several (docs/performance.md, "Pictures")
+    // the time: every run writes several (docs/performance.md, "What the outputs cost")
     encoder.set_compression(png::Compression::Fast);
     let mut writer = encoder.write_header().map_err(encode_error)?;
     writer.write_image_data(rgb).map_err(encode_error)?;
     writer.finish().map_err(encode_error)?;
-    super::product_file::write(path, &bytes).map_err(|source| PlotError::Io {
+    // through `NAME.tmp` and a rename: a full disk leaves the old picture or none, never half
+    super::product_file::replace(path, &bytes).map_err(|source| PlotError::Io {
         path: path.to_path_buf(),
         source,
     })
