@@ -13,30 +13,32 @@ use common::calculix::{ccx_available, dat_rows, run_ccx};
 use common::{run_ok, scratch_dir};
 use nalgebra::Vector3;
 use std::path::Path;
-use std::process::Command;
 use thermostamp::mesh::abaqus::{write_inp, ElementOutput};
 use thermostamp::mesh::{rectangle, DiagonalPattern};
 
 /// Runs the recipe's script on `dir/deck` (the moduli of the docs' example: yarns 40 GPa along
 /// themselves, an isotropic matrix of 3.8 GPa, 0.35), writing `dir/bands.inp`; its line.
 fn band_materials(dir: &Path, deck: &str, band: f64) -> String {
-    let out = Command::new("python3")
-        .arg(common::repo_path(
-            "examples/next-analysis/band_materials.py",
-        ))
-        .args([deck, "--warp-modulus", "40000", "--weft-modulus", "40000"])
-        .args(["--matrix-modulus", "3800", "--matrix-poisson", "0.35"])
-        .args(["--band", &band.to_string(), "--output", "bands.inp"])
-        .current_dir(dir)
-        .output()
-        .unwrap();
-    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
-    assert!(
-        out.status.success(),
-        "band_materials.py: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    stdout
+    let band = band.to_string();
+    common::run_python(
+        "examples/next-analysis/band_materials.py",
+        &[
+            deck,
+            "--warp-modulus",
+            "40000",
+            "--weft-modulus",
+            "40000",
+            "--matrix-modulus",
+            "3800",
+            "--matrix-poisson",
+            "0.35",
+            "--band",
+            &band,
+            "--output",
+            "bands.inp",
+        ],
+        dir,
+    )
 }
 
 /// The hemisphere example, 10 mm cells, 4 mm of stroke: its `formed-blank.inp`, included

@@ -55,21 +55,9 @@ fn read_with_vtk(dir: &Path, files: &[&Path]) -> Read {
     parse(&run_reader("tests/read_vtk.py", dir, files))
 }
 
-/// Runs the Python `script` on `files` in `dir`; its standard output, once it succeeded.
+/// Runs the Python `script` on `files` in `dir`; its standard output, once it read them all.
 fn run_reader(script: &str, dir: &Path, files: &[&Path]) -> String {
-    let out = Command::new("python3")
-        .arg(repo_path(script))
-        .args(files)
-        .current_dir(dir)
-        .output()
-        .unwrap();
-    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
-    assert!(
-        out.status.success(),
-        "{script} could not read the files: {}\n{stdout}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    stdout
+    common::run_python(script, files, dir)
 }
 
 fn parse(text: &str) -> Read {

@@ -407,9 +407,9 @@ struct Outline {
 fn tool_outlines(forming: &FormingModel, state: &State) -> Vec<Outline> {
     let axis = stroke_axis(forming);
     let placed = |t: usize| -> Vec<Vector3<f64>> {
-        let shift = state.tool_translations[t];
-        let surface = &forming.model.tools[t].surface;
-        surface.vertices.iter().map(|v| v + shift).collect()
+        forming.model.tools[t]
+            .vertices_at(state.tool_translations[t])
+            .collect()
     };
     let levels = |v: &[Vector3<f64>]| {
         v.iter()

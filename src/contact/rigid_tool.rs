@@ -157,6 +157,15 @@ impl RigidTool {
         reach(&self.search_radius, self.blend.as_ref())
     }
 
+    /// The vertices of the tool's triangulation where the tool stands after moving by
+    /// `translation` (the surface is kept where the tool starts).
+    pub fn vertices_at(
+        &self,
+        translation: Vector3<f64>,
+    ) -> impl Iterator<Item = Vector3<f64>> + '_ {
+        self.surface.vertices.iter().map(move |v| v + translation)
+    }
+
     /// The exact surface, where the tool has one.
     pub fn exact_surface(&self) -> Option<&SweptProfile> {
         self.exact.as_ref()

@@ -50,9 +50,12 @@ fn is_series_file(name: &str, series: &str) -> bool {
     let Some(frame) = rest.strip_prefix('_').and_then(|r| r.strip_suffix(".vtu")) else {
         return false;
     };
-    let (digits, part) = frame.split_once('_').unwrap_or((frame, "a"));
+    let (digits, part) = match frame.split_once('_') {
+        Some((digits, part)) => (digits, Some(part)),
+        None => (frame, None),
+    };
     let word = |s: &str| !s.is_empty() && s.bytes().all(|b| b.is_ascii_alphanumeric() || b == b'-');
-    !digits.is_empty() && digits.bytes().all(|b| b.is_ascii_digit()) && word(part)
+    !digits.is_empty() && digits.bytes().all(|b| b.is_ascii_digit()) && part.is_none_or(word)
 }
 
 /// Who holds a folder that could not be taken.

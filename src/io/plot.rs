@@ -378,53 +378,42 @@ fn draw(
         };
         (color, shape)
     };
-    for (index, (meta, points)) in plot.series.iter().zip(series).enumerate() {
-        let (color, shape) = curve(index, meta, points);
-        let style = color.stroke_width(line_width);
-        let drawn = match shape {
-            LineStyle::Solid => chart.draw_series(LineSeries::new(points.iter().copied(), style)),
-            LineStyle::Dashed => chart.draw_series(DashedLineSeries::new(
-                points.iter().copied(),
-                px(10.0),
-                px(6.0),
-                style,
-            )),
-            LineStyle::Markers => chart.draw_series(
-                points
-                    .iter()
-                    .map(|&p| Circle::new(p, px(3.5), color.filled())),
-            ),
-        }
-        .map_err(|e| e.to_string())?;
-        if !meta.label.is_empty() {
-            set_legend(drawn, &meta.label, meta.style, legend_size, style);
-        }
-    }
-    let right_series = right.map_or(&[][..], |(r, _)| r.series.as_slice());
-    for (index, (meta, points)) in right_series.iter().zip(right_points).enumerate() {
-        let (color, shape) = curve(plot.series.len() + index, meta, points);
-        let style = color.stroke_width(line_width);
-        let drawn = match shape {
-            LineStyle::Solid => {
-                chart.draw_secondary_series(LineSeries::new(points.iter().copied(), style))
+    // one curve onto the left axis (`draw_series`) or the right one (`draw_secondary_series`):
+    // the two take different coordinates, so the same body serves both through a macro
+    macro_rules! draw_curves {
+        ($draw:ident, $metas:expr, $points:expr, $first:expr) => {
+            for (index, (meta, points)) in $metas.iter().zip($points).enumerate() {
+                let (color, shape) = curve($first + index, meta, points);
+                let style = color.stroke_width(line_width);
+                let drawn = match shape {
+                    LineStyle::Solid => chart.$draw(LineSeries::new(points.iter().copied(), style)),
+                    LineStyle::Dashed => chart.$draw(DashedLineSeries::new(
+                        points.iter().copied(),
+                        px(10.0),
+                        px(6.0),
+                        style,
+                    )),
+                    LineStyle::Markers => chart.$draw(
+                        points
+                            .iter()
+                            .map(|&p| Circle::new(p, px(3.5), color.filled())),
+                    ),
+                }
+                .map_err(|e| e.to_string())?;
+                if !meta.label.is_empty() {
+                    set_legend(drawn, &meta.label, meta.style, legend_size, style);
+                }
             }
-            LineStyle::Dashed => chart.draw_secondary_series(DashedLineSeries::new(
-                points.iter().copied(),
-                px(10.0),
-                px(6.0),
-                style,
-            )),
-            LineStyle::Markers => chart.draw_secondary_series(
-                points
-                    .iter()
-                    .map(|&p| Circle::new(p, px(3.5), color.filled())),
-            ),
-        }
-        .map_err(|e| e.to_string())?;
-        if !meta.label.is_empty() {
-            set_legend(drawn, &meta.label, meta.style, legend_size, style);
-        }
+        };
     }
+    draw_curves!(draw_series, plot.series, series, 0);
+    let right_series = right.map_or(&[][..], |(r, _)| r.series.as_slice());
+    draw_curves!(
+        draw_secondary_series,
+        right_series,
+        right_points,
+        plot.series.len()
+    );
 
     // Close the frame on the top and right, where plotters draws no axis.
     let (columns, rows) = chart.plotting_area().get_pixel_range();

@@ -24,11 +24,10 @@ pub fn tool_frame(model: &Model, state: &State) -> Option<ToolFrame> {
     let mut codes = Vec::new();
     for (k, tool) in model.tools.iter().enumerate() {
         let first = points.len();
-        let shift = state.tool_translations[k];
-        points.extend(tool.surface.vertices.iter().map(|v| {
-            let x = v + shift;
-            [x.x, x.y, x.z]
-        }));
+        points.extend(
+            tool.vertices_at(state.tool_translations[k])
+                .map(|x| [x.x, x.y, x.z]),
+        );
         for t in &tool.surface.triangles {
             cells.push(Cell::Triangle(t.map(|n| first + n)));
             codes.push(k as u32);

@@ -488,7 +488,7 @@ fn push_code_meanings<'f>(out: &mut String, fields: impl Iterator<Item = &'f Fie
 }
 
 /// The name of the field-data array that says what code `k` of field `name` means.
-pub fn code_name(name: &str, k: usize, meaning: &str) -> String {
+fn code_name(name: &str, k: usize, meaning: &str) -> String {
     format!("{name} {k} {meaning}")
 }
 

@@ -414,3 +414,25 @@ pub fn csv_header_and_last_row(path: &std::path::Path) -> (Vec<String>, Vec<f64>
         .collect();
     (header, last)
 }
+
+/// Runs `python3 SCRIPT ARGS` in `dir`, the script named from the repository's root; its
+/// standard output, once it succeeded (else the test fails with its standard error).
+pub fn run_python<S: AsRef<std::ffi::OsStr>>(
+    script: &str,
+    args: &[S],
+    dir: &std::path::Path,
+) -> String {
+    let out = Command::new("python3")
+        .arg(repo_path(script))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(
+        out.status.success(),
+        "{script} failed: {}\n{stdout}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    stdout
+}
