@@ -6,7 +6,7 @@ mod common;
 
 use common::{repo_path, run_ok, scratch_dir};
 use std::path::Path;
-use thermostamp::cli::forming_pictures::{
+use thermostamp::forming::pictures::{
     write_pictures, Picture, FORCE_PLOT, MAP_SIZE, PLOT_SIZE, SHEAR_BLANK, SHEAR_MAP,
     THICKNESS_MAP, WRINKLE_MAP,
 };

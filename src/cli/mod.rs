@@ -11,7 +11,6 @@
 mod drape;
 mod fit;
 mod fit_fabric_tension;
-pub mod forming_pictures;
 mod forming_run;
 mod material_point;
 mod shared;

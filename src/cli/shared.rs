@@ -29,7 +29,7 @@ pub fn with_threads(
         return job();
     };
     let cores = std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get);
-    let (n, note) = thread_count(requested, cores)?;
+    let (n, note) = crate::solver::threads::thread_count(requested, cores)?;
     if let Some(note) = note {
         eprintln!("{note}");
     }
@@ -38,22 +38,6 @@ pub fn with_threads(
         .build()
         .context("cannot start the worker threads")?
         .install(job)
-}
-
-/// The worker threads to start for `--threads requested` on a machine with `cores` cores, and
-/// the note to print when it is cut down: threads beyond the cores only slow the run (and
-/// tens of thousands of them exhaust the machine).
-fn thread_count(requested: usize, cores: usize) -> anyhow::Result<(usize, Option<String>)> {
-    match requested {
-        0 => anyhow::bail!("--threads must be at least 1"),
-        n if n > cores => Ok((
-            cores,
-            Some(format!(
-                "note: --threads {n} is more than the {cores} cores of this machine; using {cores}"
-            )),
-        )),
-        n => Ok((n, None)),
-    }
 }
 
 /// Progress bar over simulated time; hidden when standard error is not a terminal.
@@ -151,30 +135,7 @@ pub fn command_line() -> String {
 
 /// The summary's line on how the run ended.
 pub fn status_row(outcome: &Result<State, SolverError>) -> (&'static str, String) {
-    let status = match outcome {
-        Ok(_) => "finished".to_string(),
-        Err(SolverError::Interrupted { step, time }) => {
-            format!("interrupted at step {step}, t = {time:.4e} s, results so far kept")
-        }
-        Err(SolverError::Unstable { step, time, .. }) => {
-            format!("unstable at step {step}, t = {time:.4e} s, results so far kept")
-        }
-        Err(SolverError::Output { time, .. }) => {
-            format!("stopped at t = {time:.4e} s: a result could not be written")
-        }
-        Err(SolverError::Check(stop)) => format!(
-            "stopped by the {} check at step {}, t = {:.4e} s, results so far kept",
-            stop.check, stop.step, stop.time
-        ),
-        Err(SolverError::NotConverged {
-            increment, time, ..
-        }) => format!(
-            "stopped: increment {increment} from t = {time:.4e} s did not converge; results up \
-             to the last converged increment kept"
-        ),
-        Err(SolverError::Settings(_)) => "not started: bad solver settings".to_string(),
-    };
-    ("status", status)
+    ("status", crate::solver::error::outcome_status(outcome))
 }
 
 /// The summary table of a run, `(name, value)` per row, then the files written.
@@ -260,23 +221,4 @@ pub fn implicit_summary(s: &crate::solver::implicit::ImplicitStatistics) -> Stri
         s.assembly_seconds,
         s.solve_seconds
     )
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn threads_are_cut_to_the_cores_and_zero_is_refused() {
-        assert_eq!(thread_count(2, 4).unwrap(), (2, None));
-        assert_eq!(thread_count(4, 4).unwrap(), (4, None));
-        let (n, note) = thread_count(100_000, 2).unwrap();
-        assert_eq!(n, 2);
-        assert_eq!(
-            note.as_deref(),
-            Some("note: --threads 100000 is more than the 2 cores of this machine; using 2")
-        );
-        let e = thread_count(0, 2).unwrap_err().to_string();
-        assert!(e.contains("--threads"), "{e}");
-    }
 }

@@ -5,6 +5,8 @@ pub mod advice;
 pub mod drape_preview;
 pub mod export;
 pub mod layup;
+pub mod output;
+pub mod pictures;
 pub mod preflight;
 pub mod run;
 pub mod scenario;

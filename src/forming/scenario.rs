@@ -961,22 +961,36 @@ impl Scenario {
     /// Reads `path`, applies the `key=value` overrides, and checks it.
     pub fn load(path: &Path, overrides: &[String]) -> Result<Self, ScenarioError> {
         let origin = path.display().to_string();
-        let error = |message: String| ScenarioError {
+        let text = std::fs::read_to_string(path).map_err(|e| ScenarioError {
             origin: origin.clone(),
+            message: format!("cannot read the scenario: {e}"),
+        })?;
+        let folder = path.parent().unwrap_or(Path::new("."));
+        Self::from_text(&text, &origin, folder, overrides)
+    }
+
+    /// The scenario written in `text` (named `origin` in messages, its file paths relative to
+    /// `folder`) with the `key=value` overrides applied, checked as [`Self::load`] checks a
+    /// file: the same messages, naming the key.
+    pub fn from_text(
+        text: &str,
+        origin: &str,
+        folder: &Path,
+        overrides: &[String],
+    ) -> Result<Self, ScenarioError> {
+        let error = |message: String| ScenarioError {
+            origin: origin.to_string(),
             message,
         };
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| error(format!("cannot read the scenario: {e}")))?;
         let file: ScenarioFile = if overrides.is_empty() {
-            from_toml_text(&text).map_err(error)?
+            from_toml_text(text).map_err(error)?
         } else {
-            let table = overridden_table(&text, overrides).map_err(error)?;
+            let table = overridden_table(text, overrides).map_err(error)?;
             from_toml_value(toml::Value::Table(table))
                 .map_err(|e| error(format!("{e} (with --set {})", overrides.join(" --set "))))?
         };
-        let folder = path.parent().unwrap_or(Path::new("."));
         let scenario = Scenario {
-            origin: origin.clone(),
+            origin: origin.to_string(),
             blank: file
                 .blank
                 .resolve(folder, file.process.temperature)
@@ -995,15 +1009,28 @@ impl Scenario {
     /// any folder, such as a study's case folder. Checked by loading it as [`Self::load`] does.
     pub fn standalone_text(path: &Path, overrides: &[String]) -> Result<String, ScenarioError> {
         let origin = path.display().to_string();
-        let error = |message: String| ScenarioError {
+        let text = std::fs::read_to_string(path).map_err(|e| ScenarioError {
             origin: origin.clone(),
+            message: format!("cannot read the scenario: {e}"),
+        })?;
+        let folder = path.parent().unwrap_or(Path::new("."));
+        Self::standalone_from_text(&text, &origin, folder, overrides)
+    }
+
+    /// [`Self::standalone_text`] of a scenario written in `text`, its paths relative to
+    /// `folder`.
+    pub fn standalone_from_text(
+        text: &str,
+        origin: &str,
+        folder: &Path,
+        overrides: &[String],
+    ) -> Result<String, ScenarioError> {
+        let error = |message: String| ScenarioError {
+            origin: origin.to_string(),
             message,
         };
-        Self::load(path, overrides)?;
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| error(format!("cannot read the scenario: {e}")))?;
-        let mut table = overridden_table(&text, overrides).map_err(error)?;
-        let folder = path.parent().unwrap_or(Path::new("."));
+        Self::from_text(text, origin, folder, overrides)?;
+        let mut table = overridden_table(text, overrides).map_err(error)?;
         let folder = std::path::absolute(folder).map_err(|e| error(e.to_string()))?;
         for keys in [
             &["blank", "card"][..],

@@ -1,5 +1,7 @@
 //! Why a run of either solver stopped early, and the settings checks they share.
 
+use super::State;
+
 /// Why a run stopped early.
 #[derive(Debug, thiserror::Error)]
 pub enum SolverError {
@@ -64,4 +66,31 @@ pub struct CheckStop {
     pub time: f64,
     pub figure: String,
     pub advice: String,
+}
+
+/// How a run ended, in the words of its summary and its result row.
+pub fn outcome_status(outcome: &Result<State, SolverError>) -> String {
+    match outcome {
+        Ok(_) => "finished".to_string(),
+        Err(SolverError::Interrupted { step, time }) => {
+            format!("interrupted at step {step}, t = {time:.4e} s, results so far kept")
+        }
+        Err(SolverError::Unstable { step, time, .. }) => {
+            format!("unstable at step {step}, t = {time:.4e} s, results so far kept")
+        }
+        Err(SolverError::Output { time, .. }) => {
+            format!("stopped at t = {time:.4e} s: a result could not be written")
+        }
+        Err(SolverError::Check(stop)) => format!(
+            "stopped by the {} check at step {}, t = {:.4e} s, results so far kept",
+            stop.check, stop.step, stop.time
+        ),
+        Err(SolverError::NotConverged {
+            increment, time, ..
+        }) => format!(
+            "stopped: increment {increment} from t = {time:.4e} s did not converge; results up \
+             to the last converged increment kept"
+        ),
+        Err(SolverError::Settings(_)) => "not started: bad solver settings".to_string(),
+    }
 }

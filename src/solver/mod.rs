@@ -14,6 +14,7 @@ pub mod implicit;
 pub mod model;
 pub mod observer;
 pub mod state;
+pub mod threads;
 pub mod yarn_damping;
 
 pub use energy::Energies;

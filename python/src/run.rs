@@ -1,0 +1,253 @@
+//! `thermostamp.run`: a forming run in this process, the interpreter free meanwhile (a Python
+//! thread goes on running), progress reported to a callable, Ctrl-C honoured as the command
+//! line honours it (the run stops after its step and keeps its results so far). Files are
+//! written, the same as `thermostamp run` writes, only into a given output folder.
+
+use crate::errors::{input_error, output_error, scenario_error};
+use crate::frame::frame_dict;
+use numpy::PyArray1;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+use thermostamp::experiment::sheet_test::Progress;
+use thermostamp::forming::advice::stop_advice;
+use thermostamp::forming::output::{
+    history_row, live_output, products, result_row, write_final_results, HISTORY_COLUMNS,
+};
+use thermostamp::forming::{FormingModel, FormingRun, Scenario};
+use thermostamp::io::output_folder::take_folder;
+use thermostamp::solver::SolverError;
+
+/// How often, at most, the run looks at Python: the progress callable and pending signals.
+const PROGRESS_EVERY: Duration = Duration::from_millis(100);
+
+/// Runs the scenario of standalone `text`; returns the result as a dictionary and the
+/// exception that stopped it early (`KeyboardInterrupt`, or what the progress callable
+/// raised), which the Python side raises with the result attached.
+#[pyfunction]
+#[pyo3(signature = (text, origin, output=None, threads=None, progress=None, command=String::new()))]
+pub fn run_scenario(
+    py: Python<'_>,
+    text: &str,
+    origin: &str,
+    output: Option<PathBuf>,
+    threads: Option<usize>,
+    progress: Option<Py<PyAny>>,
+    command: String,
+) -> PyResult<(Py<PyDict>, Option<PyErr>)> {
+    let scenario = crate::scenario::checked(py, text, origin)?;
+    let pool = worker_pool(py, threads)?;
+    let done = py.detach(|| match &pool {
+        Some(pool) => {
+            pool.install(|| form(&scenario, output.as_deref(), progress.as_ref(), &command))
+        }
+        None => form(&scenario, output.as_deref(), progress.as_ref(), &command),
+    });
+    let done = match done {
+        Ok(done) => done,
+        Err(Failure::Setup(message)) => return Err(scenario_error(py, origin, &message)),
+        Err(Failure::Output(e)) => return Err(output_error(py, e)),
+    };
+    let dict = result_dict(py, &scenario, &done)?;
+    Ok((dict.unbind(), done.raised))
+}
+
+/// A rayon pool of `threads` workers (cut to the cores), `None` for the global pool of all
+/// cores.
+fn worker_pool(py: Python<'_>, threads: Option<usize>) -> PyResult<Option<rayon::ThreadPool>> {
+    let Some(requested) = threads else {
+        return Ok(None);
+    };
+    let cores = std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get);
+    let (n, _note) = thermostamp::solver::threads::thread_count(requested, cores)
+        .map_err(|e| input_error(py, format!("threads = {requested}: {e}")))?;
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(n)
+        .build()
+        .map(Some)
+        .map_err(|e| input_error(py, format!("cannot start the worker threads: {e}")))
+}
+
+/// Why a run did not even start: a scenario the model cannot be built from, or an output
+/// folder that cannot be taken.
+enum Failure {
+    Setup(String),
+    Output(anyhow::Error),
+}
+
+/// A run that started, and what it wrote.
+struct Done {
+    forming: FormingModel,
+    run: FormingRun,
+    files: Vec<PathBuf>,
+    raised: Option<PyErr>,
+}
+
+fn form(
+    scenario: &Scenario,
+    output: Option<&Path>,
+    progress: Option<&Py<PyAny>>,
+    command: &str,
+) -> Result<Done, Failure> {
+    let forming = FormingModel::reporting(scenario, &mut |_| {}).map_err(Failure::Setup)?;
+    let _lock = match output {
+        Some(dir) => {
+            Some(take_folder(dir, command, &products()).map_err(|e| Failure::Output(e.into()))?)
+        }
+        None => None,
+    };
+    let live = match output {
+        Some(dir) => Some(live_output(dir, scenario, &forming).map_err(Failure::Output)?),
+        None => None,
+    };
+    let mut watch = Watch::new(
+        progress,
+        forming.settings.end_time,
+        scenario.process.time_scaling,
+    );
+    let run = thermostamp::forming::run::run(&forming, live, Some(&mut watch));
+    let files = match output {
+        Some(dir) if !run.records.is_empty() => {
+            write_final_results(dir, scenario, &forming, &run).map_err(Failure::Output)?
+        }
+        _ => Vec::new(),
+    };
+    Ok(Done {
+        forming,
+        run,
+        files,
+        raised: watch.raised,
+    })
+}
+
+/// The run's progress handed to the Python callable, and the signals Python has pending:
+/// looked at every [`PROGRESS_EVERY`], the interpreter taken for as long as that takes.
+struct Watch<'a> {
+    callback: Option<&'a Py<PyAny>>,
+    end_time: f64,
+    time_scaling: f64,
+    last: Option<Instant>,
+    /// What stopped the run: `KeyboardInterrupt` or an exception of the callable.
+    raised: Option<PyErr>,
+}
+
+impl<'a> Watch<'a> {
+    fn new(callback: Option<&'a Py<PyAny>>, end_time: f64, time_scaling: f64) -> Self {
+        Self {
+            callback,
+            end_time,
+            time_scaling,
+            last: None,
+            raised: None,
+        }
+    }
+}
+
+impl Progress for Watch<'_> {
+    fn update(&mut self, time: f64, step: usize) {
+        let due = self.last.is_none_or(|t| t.elapsed() >= PROGRESS_EVERY);
+        if self.raised.is_some() || !(due || time >= self.end_time) {
+            return;
+        }
+        self.last = Some(Instant::now());
+        let fraction = (time / self.end_time).clamp(0.0, 1.0);
+        let process_time = time * self.time_scaling;
+        self.raised = Python::attach(|py| {
+            py.check_signals().err().or_else(|| {
+                let callback = self.callback?;
+                callback.call1(py, (fraction, step, process_time)).err()
+            })
+        });
+    }
+
+    fn interrupted(&self) -> bool {
+        self.raised.is_some()
+    }
+}
+
+/// The result as the Python `Result` is made from: status, summary, history columns (NumPy
+/// arrays handed over without a copy), the last frame, checks, files and notes.
+fn result_dict<'py>(
+    py: Python<'py>,
+    scenario: &Scenario,
+    done: &Done,
+) -> PyResult<Bound<'py, PyDict>> {
+    let Done {
+        forming,
+        run,
+        files,
+        ..
+    } = done;
+    let dict = PyDict::new(py);
+    let row = result_row(scenario, forming, run);
+    dict.set_item("status", &row.status)?;
+    dict.set_item("outcome", outcome_kind(&run.outcome))?;
+    dict.set_item(
+        "error",
+        run.outcome.as_ref().err().map(|e| format!("{e:#}")),
+    )?;
+    let summary = PyDict::new(py);
+    for (name, value) in row.names.iter().zip(&row.values) {
+        summary.set_item(name, *value)?;
+    }
+    summary.set_item("steps", run.steps)?;
+    summary.set_item("wall_seconds", run.wall_seconds)?;
+    summary.set_item("elements", forming.model.elements.len())?;
+    summary.set_item("nodes", forming.model.mesh.nodes.len())?;
+    summary.set_item("solver", forming.solver.name())?;
+    summary.set_item("threads", rayon::current_num_threads())?;
+    dict.set_item("summary", summary)?;
+    dict.set_item("history", history_dict(py, scenario, run)?)?;
+    let frame = match run.formed_state() {
+        Some(state) => Some(frame_dict(py, &forming.model, state)?),
+        None => None,
+    };
+    dict.set_item("frame", frame)?;
+    let checks: Vec<(String, String, String)> = run
+        .checks
+        .lines
+        .iter()
+        .map(|l| (l.name.to_string(), l.status.to_string(), l.figure.clone()))
+        .collect();
+    dict.set_item("checks", checks)?;
+    dict.set_item("files", files.clone())?;
+    let mut notes = forming.notes.clone();
+    notes.extend(stop_advice(scenario, forming, run));
+    dict.set_item("notes", notes)?;
+    Ok(dict)
+}
+
+/// `finished`, `interrupted`, `output` (a result could not be written) or `failed` (the solver
+/// or a check stopped the run, results so far kept).
+fn outcome_kind<T>(outcome: &Result<T, SolverError>) -> &'static str {
+    match outcome {
+        Ok(_) => "finished",
+        Err(SolverError::Interrupted { .. }) => "interrupted",
+        Err(SolverError::Output { .. }) => "output",
+        Err(_) => "failed",
+    }
+}
+
+/// The history by column, the values of `forming.csv` ([`HISTORY_COLUMNS`]).
+fn history_dict<'py>(
+    py: Python<'py>,
+    scenario: &Scenario,
+    run: &FormingRun,
+) -> PyResult<Bound<'py, PyDict>> {
+    let mut columns: Vec<Vec<f64>> = (0..HISTORY_COLUMNS.len())
+        .map(|_| Vec::with_capacity(run.records.len()))
+        .collect();
+    for record in &run.records {
+        let row = history_row(record, scenario.process.time_scaling);
+        for (column, value) in columns.iter_mut().zip(row) {
+            column.push(value);
+        }
+    }
+    let dict = PyDict::new(py);
+    for (name, column) in HISTORY_COLUMNS.iter().zip(columns) {
+        // the vector's buffer becomes the array's: no copy
+        dict.set_item(name, PyArray1::from_vec(py, column))?;
+    }
+    Ok(dict)
+}

@@ -1,0 +1,45 @@
+"""thermostamp: thermo-stamping simulation of woven-fabric thermoplastic prepregs with the
+lamination model of Gong et al. (Composite Structures 2018), from Python.
+
+The same engine as the ``thermostamp`` command line, in this process::
+
+    import thermostamp as ts
+    scenario = ts.Scenario.load("examples/hemisphere.toml", set={"process.temperature": 310})
+    result = ts.run(scenario)                 # a Result: summary, history, last frame
+    result.summary["peak_punch_force"]        # N
+    result.history["punch_force"]             # NumPy array, one value per record
+
+Units everywhere: mm, N, s, MPa, tonne/mm^3, °C. The guide is docs/guide/python.md.
+"""
+
+from . import errors
+from ._core import HISTORY_COLUMNS, __version__
+from .errors import (
+    InputError,
+    OutputError,
+    RunFailed,
+    ScenarioError,
+    StudyError,
+    ThermostampError,
+)
+from .forming import RunWarning, run
+from .result import Check, Frame, Result
+from .scenario import Scenario
+
+__all__ = [
+    "Check",
+    "Frame",
+    "HISTORY_COLUMNS",
+    "InputError",
+    "OutputError",
+    "Result",
+    "RunFailed",
+    "RunWarning",
+    "Scenario",
+    "ScenarioError",
+    "StudyError",
+    "ThermostampError",
+    "__version__",
+    "errors",
+    "run",
+]
