@@ -143,7 +143,8 @@ fn parse_number(cell: &str, column: &str, origin: &str, line: usize) -> Result<f
     }
 }
 
-/// Writes a header and rows of numbers as CSV, with 10 significant digits. A NaN or an
+/// Writes a header and rows of numbers as CSV, each as the shortest text that reads back to the
+/// same double ([`number_text`]). A NaN or an
 /// infinity is refused (`InvalidData`, naming the column and the row) rather than written:
 /// the rows before it are kept.
 pub fn write_csv<W: Write, R: AsRef<[f64]>>(
@@ -157,11 +158,7 @@ pub fn write_csv<W: Write, R: AsRef<[f64]>>(
             out.flush()?;
             return Err(e);
         }
-        let cells: Vec<String> = row
-            .as_ref()
-            .iter()
-            .map(|&v| significant_digits(v))
-            .collect();
+        let cells: Vec<String> = row.as_ref().iter().map(|&v| number_text(v)).collect();
         writeln!(out, "{}", cells.join(","))?;
     }
     out.flush()
@@ -224,7 +221,7 @@ impl CsvStream {
         Ok(stream)
     }
 
-    /// Appends one row of numbers (10 significant digits); it must have one per column.
+    /// Appends one row of numbers ([`number_text`]); it must have one per column.
     pub fn write_row(&mut self, row: &[f64]) -> Result<(), WriteError> {
         let failed = |source| WriteError {
             path: self.path.clone(),
@@ -264,14 +261,15 @@ impl CsvStream {
 
 /// One row as a CSV line, newline included.
 fn csv_line(row: &[f64]) -> String {
-    let cells: Vec<String> = row.iter().map(|&v| significant_digits(v)).collect();
+    let cells: Vec<String> = row.iter().map(|&v| number_text(v)).collect();
     format!("{}\n", cells.join(","))
 }
 
-/// `v` rounded to 10 significant digits, in its shortest exponent form (`1.8e0`, `-2.5e-7`).
-fn significant_digits(v: f64) -> String {
-    let rounded: f64 = format!("{v:.9e}").parse().unwrap_or(v);
-    format!("{rounded:e}")
+/// `v` in the shortest exponent form that reads back to the same double (`1.8e0`,
+/// `-2.5e-7`, at most 17 significant digits): a script reading the CSV gets the very numbers
+/// the run computed, those the Python package hands over as arrays.
+pub fn number_text(v: f64) -> String {
+    format!("{v:e}")
 }
 
 #[cfg(test)]
@@ -315,6 +313,27 @@ mod tests {
         assert!(e.to_string().contains("missing column 'c'"), "{e}");
         let e = parse_csv_columns("a,b,c\n1,2\n", "h.csv", &["a"]).unwrap_err();
         assert_eq!(e.line, Some(2));
+    }
+
+    #[test]
+    fn numbers_read_back_to_the_same_double() {
+        for v in [
+            0.1,
+            1.0 / 3.0,
+            -2.5e-7,
+            6.02214076e23,
+            f64::MIN_POSITIVE,
+            0.0,
+            -0.0,
+        ] {
+            let text = number_text(v);
+            assert_eq!(
+                text.parse::<f64>().unwrap().to_bits(),
+                v.to_bits(),
+                "{text}"
+            );
+        }
+        assert_eq!(number_text(1.8), "1.8e0");
     }
 
     #[test]
