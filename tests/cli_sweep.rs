@@ -316,3 +316,290 @@ fn the_example_study_runs_in_reduced_form() {
         assert!(none > most, "temperature #{t}: {waviness:?}");
     }
 }
+
+/// `study.toml` in `dir` with a `[design]` section before the parameters of [`study`].
+fn designed_study(dir: &Path, design: &str, parameters: &str) -> PathBuf {
+    let path = study(dir, "examples/hemisphere.toml", parameters);
+    let text = std::fs::read_to_string(&path).unwrap();
+    let text = text.replace("[parameters]", &format!("[design]\n{design}\n[parameters]"));
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+const TWO_RANGES: &str = "process.temperature = { from = 280.0, to = 320.0 }\n\
+                          process.blank_holder_force = { from = 0.0, to = 200.0 }";
+
+/// The lines `--list` prints, which must succeed.
+fn listed(study: &Path) -> Vec<String> {
+    let out = sweep(study, &["--list"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .map(String::from)
+        .collect()
+}
+
+/// The value of `key` on a `--list` line (`key = value, ...`).
+fn listed_value(line: &str, key: &str) -> f64 {
+    let start = line.find(&format!("{key} = ")).unwrap() + key.len() + 3;
+    line[start..]
+        .split([',', ' '])
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap()
+}
+
+/// A sampled design lists `samples` cases, each value within its range (a list's values from
+/// the list); the same seed lists the same cases again, another seed other ones, and so does
+/// the other method.
+#[test]
+fn sampled_designs_list_reproducible_cases() {
+    let dir = scratch_dir("sweep", "designs-list");
+    let _ = std::fs::remove_dir_all(dir.join("out"));
+    let parameters = format!("{TWO_RANGES}\nprocess.punch_speed = [5.0, 10.0]");
+    let list_of = |design: &str| listed(&designed_study(&dir, design, &parameters));
+    let lhs = list_of("method = \"latin-hypercube\"\nsamples = 6\nseed = 7");
+    assert_eq!(lhs.len(), 6, "{lhs:?}");
+    for line in &lhs {
+        assert!(line.ends_with("not run"), "{line}");
+        let t = listed_value(line, "process.temperature");
+        let f = listed_value(line, "process.blank_holder_force");
+        let speed = listed_value(line, "process.punch_speed");
+        assert!(
+            (280.0..=320.0).contains(&t) && (0.0..=200.0).contains(&f),
+            "{line}"
+        );
+        assert!(speed == 5.0 || speed == 10.0, "{line}");
+    }
+    assert_eq!(
+        lhs,
+        list_of("method = \"latin-hypercube\"\nsamples = 6\nseed = 7")
+    );
+    assert_ne!(
+        lhs,
+        list_of("method = \"latin-hypercube\"\nsamples = 6\nseed = 8")
+    );
+    let sobol = list_of("method = \"sobol\"\nsamples = 6\nseed = 7");
+    assert_eq!(sobol.len(), 6);
+    assert_ne!(lhs, sobol);
+}
+
+/// Designs a study cannot run: exit code 2, one line naming the key and saying why, no case.
+#[test]
+fn bad_designs_are_refused_naming_the_key() {
+    let dir = scratch_dir("sweep", "designs-bad");
+    let counted = "process.temperature = { from = 280.0, to = 320.0, count = 3 }";
+    let cases: [(&str, &str, &[&str]); 6] = [
+        (
+            "method = \"latin-hypercube\"\nsamples = 4",
+            counted,
+            &["parameters.process.temperature.count", "no count"],
+        ),
+        (
+            "method = \"latin-hypercube\"",
+            TWO_RANGES,
+            &["design.samples is missing"],
+        ),
+        (
+            "method = \"sobol\"\nsamples = 0",
+            TWO_RANGES,
+            &["design.samples = 0", "from 1 to 1000000"],
+        ),
+        (
+            "samples = 4",
+            counted,
+            &["design.samples", "full-factorial"],
+        ),
+        (
+            "method = \"full-factorial\"\nseed = 4",
+            counted,
+            &["design.seed", "full-factorial"],
+        ),
+        (
+            "method = \"monte-carlo\"\nsamples = 4",
+            TWO_RANGES,
+            &["design.method = \"monte-carlo\"", "latin-hypercube"],
+        ),
+    ];
+    for (design, parameters, expected) in cases {
+        let _ = std::fs::remove_dir_all(dir.join("out"));
+        let path = designed_study(&dir, design, parameters);
+        for extra in [&[][..], &["--list"]] {
+            let out = sweep(&path, extra);
+            let stderr = String::from_utf8_lossy(&out.stderr);
+            assert_eq!(out.status.code(), Some(2), "{design}: {stderr}");
+            assert_eq!(stderr.trim().lines().count(), 1, "{design}: {stderr}");
+            for e in expected {
+                assert!(stderr.contains(e), "{design}: {stderr}");
+            }
+        }
+        assert!(!dir.join("out").exists(), "{design}: a case ran");
+    }
+}
+
+/// Three Latin-hypercube cases run: the summary holds the listed values, every case done, and
+/// the scatter charts; `--list` of the same study then lists them done (a list after the
+/// ranges, which TOML writes before tables, keeps its place in the folder's record), and the
+/// same folder refuses the study with another seed as another study.
+#[test]
+fn a_sampled_sweep_runs_its_cases_and_charts_them() {
+    let dir = scratch_dir("sweep", "designs-run");
+    let _ = std::fs::remove_dir_all(dir.join("out"));
+    // the ply at 0°, as in the example: a list after the ranges
+    let parameters = format!("{TWO_RANGES}\nblank.ply_angle = [0.0]");
+    let path = designed_study(
+        &dir,
+        "method = \"latin-hypercube\"\nsamples = 3\nseed = 11",
+        &parameters,
+    );
+    let list = listed(&path);
+    let out = sweep(&path, &[]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(column(&dir, "status"), vec!["done"; 3]);
+    let summary: Vec<f64> = column(&dir, "process.temperature")
+        .iter()
+        .map(|v| v.parse().unwrap())
+        .collect();
+    let in_list: Vec<f64> = list
+        .iter()
+        .map(|l| listed_value(l, "process.temperature"))
+        .collect();
+    assert_eq!(summary, in_list);
+    for png in ["study-waviness.png", "study-max-shear.png"] {
+        assert!(std::fs::metadata(dir.join("out").join(png)).unwrap().len() > 1000);
+    }
+    let again = listed(&path);
+    assert!(again.iter().all(|l| l.ends_with("done")), "{again:?}");
+    let text = std::fs::read_to_string(&path).unwrap();
+    std::fs::write(&path, text.replace("seed = 11", "seed = 12")).unwrap();
+    let out = sweep(&path, &["--list"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("another study") && stderr.contains("design differs"),
+        "{stderr}"
+    );
+}
+
+/// `--emit slurm` prints a script that bash parses, with an array of one task per case that
+/// `--list` lists, at most K (`--throttle`, default 32) at once; it runs nothing.
+#[test]
+fn emit_slurm_prints_a_job_array_of_the_cases() {
+    let dir = scratch_dir("sweep", "emit");
+    let _ = std::fs::remove_dir_all(dir.join("out"));
+    let path = study(&dir, "examples/hemisphere.toml", TWO_BY_TWO);
+    let cases = listed(&path).len();
+    let script = |extra: &[&str]| {
+        let mut args = vec!["--emit", "slurm"];
+        args.extend_from_slice(extra);
+        let out = sweep(&path, &args);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8(out.stdout).unwrap()
+    };
+    let text = script(&["--throttle", "3"]);
+    assert!(text.starts_with("#!/bin/bash\n"), "{text}");
+    assert!(
+        text.contains(&format!("\n#SBATCH --array=1-{cases}%3\n")),
+        "{text}"
+    );
+    assert!(text.contains("\n#SBATCH --job-name=study\n"), "{text}");
+    assert!(text.contains("\n#SBATCH --cpus-per-task=1\n"), "{text}");
+    assert!(text.contains("--case \"$SLURM_ARRAY_TASK_ID\"\n"), "{text}");
+    assert!(
+        text.contains("sbatch --dependency=afterany:") && text.contains("--summarise"),
+        "{text}"
+    );
+    bash_parses(&dir, &text);
+    // the default throttle, 32, is capped at the 4 cases
+    assert!(script(&[]).contains(&format!("\n#SBATCH --array=1-{cases}%{cases}\n")));
+    assert!(!dir.join("out").exists(), "--emit ran something");
+    for (extra, expected) in [
+        (&["--emit", "pbs"][..], "pbs"),
+        (&["--emit", "slurm", "--case", "1"], "--case"),
+        (&["--emit", "slurm", "--list"], "--list"),
+        (&["--emit", "slurm", "--summarise"], "--summarise"),
+        (&["--emit", "slurm", "--throttle", "0"], "--throttle"),
+        (&["--throttle", "4"], "--emit"),
+    ] {
+        let out = sweep(&path, extra);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{extra:?}: {stderr}");
+        assert!(stderr.contains(expected), "{extra:?}: {stderr}");
+    }
+}
+
+/// `bash -n` accepts `script`.
+fn bash_parses(dir: &Path, script: &str) {
+    let file = dir.join("emitted.sh");
+    std::fs::write(&file, script).unwrap();
+    let out = Command::new("bash").arg("-n").arg(&file).output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}\n{script}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// A study in a folder whose name holds a space and a quote, emitted from that folder: the
+/// script parses, and its last lines, run by bash with `exec` standing in for the run (it
+/// prints the folder it is in and its arguments), reach that folder with the executable, the
+/// study's path and the array task's number intact; the log goes into the study's folder.
+#[test]
+fn emit_slurm_quotes_paths_with_spaces_and_quotes() {
+    let dir = scratch_dir("sweep", "it's a \"study\" $HOME");
+    let _ = std::fs::remove_dir_all(dir.join("out"));
+    let path = study(&dir, "examples/hemisphere.toml", TWO_BY_TWO);
+    let text = std::fs::read_to_string(&path).unwrap();
+    let folder_line = text.lines().find(|l| l.starts_with("folder = ")).unwrap();
+    std::fs::write(&path, text.replace(folder_line, "folder = \"out\"")).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_thermostamp"))
+        .args(["sweep", "study.toml", "--emit", "slurm"])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let script = String::from_utf8(out.stdout).unwrap();
+    bash_parses(&dir, &script);
+    let ran = Command::new("bash")
+        .arg("-c")
+        .arg("exec() { printf '%s\\n' \"$PWD\" \"$@\"; exit 0; }; . \"$0\"")
+        .arg(dir.join("emitted.sh"))
+        .env("SLURM_ARRAY_TASK_ID", "3")
+        .current_dir(std::env::temp_dir())
+        .output()
+        .unwrap();
+    assert!(
+        ran.status.success(),
+        "{}",
+        String::from_utf8_lossy(&ran.stderr)
+    );
+    let printed = String::from_utf8(ran.stdout).unwrap();
+    let lines: Vec<&str> = printed.lines().collect();
+    let exe = std::fs::canonicalize(env!("CARGO_BIN_EXE_thermostamp")).unwrap();
+    assert_eq!(lines.len(), 6, "{printed}");
+    assert_eq!(Path::new(lines[0]), dir, "{printed}");
+    assert_eq!(std::fs::canonicalize(lines[1]).unwrap(), exe, "{printed}");
+    assert_eq!(
+        &lines[2..],
+        ["sweep", path.to_str().unwrap(), "--case", "3"]
+    );
+    let output = format!(
+        "#SBATCH --output=\"{}/slurm-%A_%a.log\"",
+        dir.join("out").display().to_string().replace('"', "\\\"")
+    );
+    assert!(script.lines().any(|l| l == output), "{output}\n{script}");
+}

@@ -717,6 +717,13 @@ pub struct MapPlot {
     pub marker: Option<Marker>,
     /// Legend entries for kinds of cell (e.g. wrinkled, failed), beside those of the lines.
     pub legend: Vec<LegendCell>,
+    /// Each cell drawn as a dot at its centre, not as its polygon (a scatter of a study's
+    /// sampled cases over two parameters, which tile nothing); the dots keep the cells'
+    /// colours and outlines.
+    pub dots: bool,
+    /// The x and y spans of the plotting area; `None`: the box around the cells and lines
+    /// (dots at the box's edge would be cut in half: give their spans with a margin).
+    pub extent: Option<(std::ops::Range<f64>, std::ops::Range<f64>)>,
 }
 
 /// Ticks of an axis: each place and its label.
@@ -833,6 +840,8 @@ impl MapPlot {
             lines: Vec::new(),
             marker: None,
             legend: Vec::new(),
+            dots: false,
+            extent: None,
         }
     }
 
@@ -964,6 +973,9 @@ impl ValueFormatter<f64> for MapAxis {
 /// The box around the cells and lines, padded to the drawing area's proportions where the
 /// scales are equal.
 fn map_extent(map: &MapPlot, aspect: f64) -> (std::ops::Range<f64>, std::ops::Range<f64>) {
+    if let Some(extent) = &map.extent {
+        return extent.clone();
+    }
     let lines = map.lines.iter().flat_map(|l| l.segments.iter().flatten());
     let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
     for &(x, y) in map.cells.iter().flatten().chain(lines) {
@@ -1050,27 +1062,11 @@ fn draw_map(root: &DrawingArea<PlotBackend, Shift>, map: &MapPlot) -> Result<Map
             .draw()
             .map_err(text)?;
     }
-    chart
-        .draw_series(
-            map.cells
-                .iter()
-                .enumerate()
-                .map(|(k, c)| Polygon::new(c.clone(), map.shaded_colour(k).filled())),
-        )
-        .map_err(text)?;
-    chart
-        .draw_series(
-            map.cells
-                .iter()
-                .zip(&map.outlined)
-                .filter(|(_, &outlined)| outlined)
-                .map(|(c, _)| {
-                    let mut ring = c.clone();
-                    ring.extend(c.first().copied());
-                    PathElement::new(ring, BLACK.stroke_width(px(3.0)))
-                }),
-        )
-        .map_err(text)?;
+    if map.dots {
+        draw_dots(&mut chart, map, &design)?;
+    } else {
+        draw_cells(&mut chart, map, &design)?;
+    }
     draw_cell_labels(&mut chart, map, font(14.0))?;
     for line in &map.lines {
         let (r, g, b) = line.colour;
@@ -1108,6 +1104,78 @@ fn draw_map(root: &DrawingArea<PlotBackend, Shift>, map: &MapPlot) -> Result<Map
     Ok(frame)
 }
 
+/// The cells filled with their colours, the outlined ones ringed in black.
+fn draw_cells(
+    chart: &mut ChartContext<PlotBackend, Cartesian2d<MapAxis, MapAxis>>,
+    map: &MapPlot,
+    design: &DesignScale,
+) -> Result<(), String> {
+    let text = |e: DrawingAreaErrorKind<_>| e.to_string();
+    chart
+        .draw_series(
+            map.cells
+                .iter()
+                .enumerate()
+                .map(|(k, c)| Polygon::new(c.clone(), map.shaded_colour(k).filled())),
+        )
+        .map_err(text)?;
+    chart
+        .draw_series(
+            map.cells
+                .iter()
+                .zip(&map.outlined)
+                .filter(|(_, &outlined)| outlined)
+                .map(|(c, _)| {
+                    let mut ring = c.clone();
+                    ring.extend(c.first().copied());
+                    PathElement::new(ring, BLACK.stroke_width(design.px(3.0)))
+                }),
+        )
+        .map_err(text)?;
+    Ok(())
+}
+
+/// The centre of a cell: the mean of its corners.
+fn centre(cell: &[(f64, f64)]) -> (f64, f64) {
+    let n = cell.len().max(1) as f64;
+    cell.iter()
+        .fold((0.0, 0.0), |(x, y), p| (x + p.0 / n, y + p.1 / n))
+}
+
+/// Each cell as a dot at its centre, in its colour with a thin dark edge (so that a pale
+/// colour still shows on white), the outlined ones ringed in black.
+fn draw_dots(
+    chart: &mut ChartContext<PlotBackend, Cartesian2d<MapAxis, MapAxis>>,
+    map: &MapPlot,
+    design: &DesignScale,
+) -> Result<(), String> {
+    let text = |e: DrawingAreaErrorKind<_>| e.to_string();
+    let radius = design.px(7.0);
+    let edge = RGBColor(60, 60, 60);
+    let dots = map.cells.iter().enumerate().map(|(k, c)| (k, centre(c)));
+    chart
+        .draw_series(dots.clone().flat_map(|(k, at)| {
+            [
+                Circle::new(at, radius, map.shaded_colour(k).filled()),
+                Circle::new(at, radius, edge.stroke_width(design.px(1.0))),
+            ]
+        }))
+        .map_err(text)?;
+    chart
+        .draw_series(
+            dots.filter(|(k, _)| map.outlined.get(*k).copied().unwrap_or(false))
+                .map(|(_, at)| {
+                    Circle::new(
+                        at,
+                        radius + design.px(2.5),
+                        BLACK.stroke_width(design.px(3.0)),
+                    )
+                }),
+        )
+        .map_err(text)?;
+    Ok(())
+}
+
 /// Each cell's label at its centre, black on light colours and white on dark ones.
 fn draw_cell_labels(
     chart: &mut ChartContext<PlotBackend, Cartesian2d<MapAxis, MapAxis>>,
@@ -1118,10 +1186,7 @@ fn draw_cell_labels(
     let centred = Pos::new(HPos::Center, VPos::Center);
     chart
         .draw_series(labels.map(|(k, (cell, label))| {
-            let n = cell.len().max(1) as f64;
-            let (x, y) = cell
-                .iter()
-                .fold((0.0, 0.0), |(x, y), p| (x + p.0 / n, y + p.1 / n));
+            let (x, y) = centre(cell);
             let RGBColor(r, g, b) = map.shaded_colour(k);
             // perceived brightness (ITU-R BT.601 weights)
             let light = 0.299 * f64::from(r) + 0.587 * f64::from(g) + 0.114 * f64::from(b) > 140.0;

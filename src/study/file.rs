@@ -1,9 +1,11 @@
 //! The study file: a base forming scenario, the parameters to vary (any scalar of the scenario,
-//! as lists or ranges), and where the cases go (docs/study.md). Reading it checks the file,
+//! as lists or ranges), its design (the full factorial of the values, or cases sampled from
+//! them: [`super::design`]), and where the cases go (docs/study.md). Reading it checks the file,
 //! the base scenario and the first case (so that a key the scenario does not know stops the
 //! study at once); the cases are made one at a time from their number, never all held at
 //! once, and each case's own scenario is checked before it runs ([`Study::check_case`]).
 
+use super::design::{Design, DesignSection, Method};
 use crate::forming::Scenario;
 use crate::io::from_toml_text;
 use serde::Deserialize;
@@ -20,8 +22,10 @@ pub struct Study {
     pub origin: String,
     /// The base scenario (absolute path).
     pub base: PathBuf,
-    /// The varied parameters, in the file's order: the first two span the heat maps.
+    /// The varied parameters, in the file's order: the first two span the charts.
     pub parameters: Vec<Parameter>,
+    /// Which cases run: every combination of the values, or a sample of them.
+    pub design: Design,
     /// Where the case folders and the summary go (absolute path; given relative to the folder
     /// the sweep runs in, as a scenario's `output.folder` is).
     pub folder: PathBuf,
@@ -29,7 +33,8 @@ pub struct Study {
     pub wrinkle_threshold: f64,
     /// Worker threads of each case; the cases run side by side on the remaining cores.
     pub threads_per_case: usize,
-    /// Number of cases: the product of the parameters' counts, at most [`MAX_CASES`].
+    /// Number of cases: the product of the parameters' counts, or the samples of a sampled
+    /// design; at most [`MAX_CASES`].
     cases_count: usize,
 }
 
@@ -45,20 +50,28 @@ pub struct Parameter {
 #[derive(Clone, Debug, PartialEq)]
 pub enum Values {
     List(Vec<toml::Value>),
-    /// `count` values evenly from `from` to `to`, both included.
+    /// `count` values evenly from `from` to `to`, both included (the full factorial).
     Range {
         from: f64,
         to: f64,
         count: usize,
     },
+    /// Any value from `from` to `to` (a sampled design): no list of values, so
+    /// [`Self::count`] is 0; [`Self::at`] gives them.
+    Interval {
+        from: f64,
+        to: f64,
+    },
 }
 
 impl Values {
-    /// How many values (at least one).
+    /// How many values: at least one for a list or a counted range, 0 for an interval (whose
+    /// values are not counted).
     pub fn count(&self) -> usize {
         match self {
             Values::List(values) => values.len(),
             Values::Range { count, .. } => *count,
+            Values::Interval { .. } => 0,
         }
     }
 
@@ -74,8 +87,34 @@ impl Values {
                 };
                 Some(toml::Value::Float(from + t * (to - from)))
             }
-            Values::Range { .. } => None,
+            Values::Range { .. } | Values::Interval { .. } => None,
         }
+    }
+
+    /// The value at `u` in [0, 1] of a sampled design's coordinate: for an interval the point
+    /// that far from `from` to `to` (a TOML float), for a list or a counted range value
+    /// `floor(u * count)` (each value an equal share of [0, 1)).
+    pub fn at(&self, u: f64) -> Option<toml::Value> {
+        match self {
+            Values::Interval { from, to } => Some(toml::Value::Float(from + u * (to - from))),
+            _ => {
+                let n = self.count();
+                self.get(((u * n as f64).floor() as usize).min(n.saturating_sub(1)))
+            }
+        }
+    }
+
+    /// The smallest and largest numbers among the values (the span of a chart's axis);
+    /// `None` where a value is not a number.
+    pub fn span(&self) -> Option<(f64, f64)> {
+        let numbers: Option<Vec<f64>> = match self {
+            Values::Interval { from, to } => Some(vec![*from, *to]),
+            _ => self.iter().map(|v| number(&v)).collect(),
+        };
+        let numbers = numbers?;
+        let low = numbers.iter().copied().reduce(f64::min)?;
+        let high = numbers.iter().copied().reduce(f64::max)?;
+        Some((low, high))
     }
 
     /// The values in order.
@@ -94,12 +133,31 @@ impl Values {
                 table.insert("count".into(), toml::Value::Integer(*count as i64));
                 toml::Value::Table(table)
             }
+            Values::Interval { from, to } => {
+                let mut table = toml::Table::new();
+                table.insert("from".into(), toml::Value::Float(*from));
+                table.insert("to".into(), toml::Value::Float(*to));
+                toml::Value::Table(table)
+            }
         }
     }
 
-    /// The same values in the same order, however written (a list or a range).
+    /// The same values in the same order, however written (a list or a range); an interval
+    /// is the same as the same interval only.
     pub fn same_as(&self, other: &Values) -> bool {
-        self.count() == other.count() && self.iter().eq(other.iter())
+        match (self, other) {
+            (Values::Interval { .. }, _) | (_, Values::Interval { .. }) => self == other,
+            _ => self.count() == other.count() && self.iter().eq(other.iter()),
+        }
+    }
+}
+
+/// A TOML number as a float; `None` for a string or a boolean.
+pub fn number(v: &toml::Value) -> Option<f64> {
+    match v {
+        toml::Value::Float(f) => Some(*f),
+        toml::Value::Integer(i) => Some(*i as f64),
+        _ => None,
     }
 }
 
@@ -124,6 +182,8 @@ struct StudyFile {
     base: PathBuf,
     parameters: toml::Table,
     #[serde(default)]
+    design: DesignSection,
+    #[serde(default)]
     output: OutputSection,
     #[serde(default)]
     run: RunSection,
@@ -143,23 +203,48 @@ struct RunSection {
 }
 
 impl Study {
-    /// Reads and checks the study at `path`: the base scenario loads, every parameter has at
-    /// least one value and is given once, the cases number [`MAX_CASES`] at most, and the
-    /// first case's scenario loads (so that a key the scenario does not know is an error
-    /// naming it). The other cases are checked by [`Self::check_case`].
+    /// Reads and checks the study at `path`: its `base` relative to the study file's folder,
+    /// its `output.folder` relative to the current directory ([`Self::from_text`]).
     pub fn load(path: &Path) -> Result<Self, StudyError> {
         let origin = path.display().to_string();
-        let error = |message: String| StudyError {
+        let text = std::fs::read_to_string(path).map_err(|e| StudyError {
             origin: origin.clone(),
+            message: format!("cannot read the study file: {e}"),
+        })?;
+        let run_dir = std::env::current_dir().map_err(|e| StudyError {
+            origin: origin.clone(),
+            message: format!("cannot tell the current directory: {e}"),
+        })?;
+        Self::from_text(&text, &origin, study_folder(path), &run_dir)
+    }
+
+    /// Reads and checks a study from the text of a study file (one that a program wrote, say),
+    /// named `origin` in messages (its file stem names the default `output.folder`, as a study
+    /// file's does): `base` is resolved against `base_dir`, `output.folder` against `run_dir`.
+    /// Checks that the base scenario loads, every parameter has at least one value and is
+    /// given once, the design holds, the cases number [`MAX_CASES`] at most, and the first
+    /// case's scenario loads (so that a key the scenario does not know is an error naming
+    /// it). The other cases are checked by [`Self::check_case`].
+    pub fn from_text(
+        text: &str,
+        origin: &str,
+        base_dir: &Path,
+        run_dir: &Path,
+    ) -> Result<Self, StudyError> {
+        let error = |message: String| StudyError {
+            origin: origin.to_string(),
             message,
         };
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| error(format!("cannot read the study file: {e}")))?;
-        let file: StudyFile = from_toml_text(&text).map_err(error)?;
-        let folder = std::path::absolute(study_folder(path)).map_err(|e| error(e.to_string()))?;
+        let file: StudyFile = from_toml_text(text).map_err(error)?;
+        let folder = std::path::absolute(base_dir).map_err(|e| error(e.to_string()))?;
         let base = folder.join(&file.base);
-        let parameters = parameters(&file.parameters).map_err(error)?;
-        let cases_count = cases_count(&parameters).map_err(error)?;
+        let method = file.design.method().map_err(error)?;
+        let parameters = parameters(&file.parameters, method).map_err(error)?;
+        let design = file.design.design(parameters.len()).map_err(error)?;
+        let cases_count = match &design {
+            Design::FullFactorial => cases_count(&parameters).map_err(error)?,
+            Design::Sampled(s) => s.samples,
+        };
         let base_scenario = Scenario::load(&base, &[])
             .map_err(|e| error(format!("base = {}: {e}", file.base.display())))?;
         let half_ply = 0.5 * ply_thickness(&base_scenario).map_err(error)?;
@@ -178,12 +263,13 @@ impl Study {
         let output = file
             .output
             .folder
-            .unwrap_or_else(|| PathBuf::from(default_folder(path)));
+            .unwrap_or_else(|| PathBuf::from(default_folder(Path::new(origin))));
         let study = Self {
-            origin: origin.clone(),
+            origin: origin.to_string(),
             base,
             parameters,
-            folder: std::path::absolute(&output).map_err(|e| error(e.to_string()))?,
+            design,
+            folder: std::path::absolute(run_dir.join(&output)).map_err(|e| error(e.to_string()))?,
             wrinkle_threshold,
             threads_per_case,
             cases_count,
@@ -194,11 +280,22 @@ impl Study {
         Ok(study)
     }
 
-    /// Case `number` (from 1) of the full factorial of the parameters' values, the last
-    /// parameter varying fastest; `None` beyond the last case.
+    /// Case `number` (from 1): of the full factorial of the parameters' values, the last
+    /// parameter varying fastest, or the sampled design's point `number - 1` mapped onto the
+    /// parameters' values ([`Values::at`]); `None` beyond the last case.
     pub fn case(&self, number: usize) -> Option<Case> {
         if number == 0 || number > self.cases_count {
             return None;
+        }
+        if let Design::Sampled(sampling) = &self.design {
+            let point = sampling.point(number - 1)?;
+            let values = self
+                .parameters
+                .iter()
+                .zip(point)
+                .map(|(p, &u)| p.values.at(u))
+                .collect::<Option<Vec<_>>>()?;
+            return Some(Case { number, values });
         }
         let mut rest = number - 1;
         let mut values = Vec::with_capacity(self.parameters.len());
@@ -271,11 +368,12 @@ fn study_folder(path: &Path) -> &Path {
     }
 }
 
-/// The parameters of the study file's `[parameters]` table, each given once.
-pub fn parameters(table: &toml::Table) -> Result<Vec<Parameter>, String> {
+/// The parameters of the study file's `[parameters]` table, each given once; ranges as the
+/// design `method` takes them (counted for the full factorial, continuous for a sampled one).
+pub fn parameters(table: &toml::Table, method: Method) -> Result<Vec<Parameter>, String> {
     let mut out = Vec::new();
     let mut spellings = Vec::new();
-    flatten(("", ""), table, &mut out, &mut spellings)?;
+    flatten(("", ""), table, method, &mut out, &mut spellings)?;
     if out.is_empty() {
         return Err("[parameters] is empty: name at least one scenario key to vary".into());
     }
@@ -290,6 +388,7 @@ pub fn parameters(table: &toml::Table) -> Result<Vec<Parameter>, String> {
 fn flatten(
     prefix: (&str, &str),
     table: &toml::Table,
+    method: Method,
     out: &mut Vec<Parameter>,
     spellings: &mut Vec<String>,
 ) -> Result<(), String> {
@@ -305,9 +404,12 @@ fn flatten(
         let spelling = joined(prefix.1, &spelled(name));
         let values = match value {
             toml::Value::Array(values) => list(&key, values)?,
+            toml::Value::Table(t) if t.contains_key("from") && method.sampled() => {
+                interval(&key, t, method)?
+            }
             toml::Value::Table(t) if t.contains_key("from") => range(&key, t)?,
             toml::Value::Table(t) => {
-                flatten((&key, &spelling), t, out, spellings)?;
+                flatten((&key, &spelling), t, method, out, spellings)?;
                 continue;
             }
             other => {
@@ -370,17 +472,7 @@ fn range(key: &str, table: &toml::Table) -> Result<Values, String> {
             "parameters.{key}.{unknown}: a range has from, to and count only"
         ));
     }
-    let number = |name: &str| match table.get(name) {
-        Some(toml::Value::Float(x)) if x.is_finite() => Ok(*x),
-        Some(toml::Value::Integer(i)) => Ok(*i as f64),
-        Some(other) => Err(format!(
-            "parameters.{key}.{name} = {other}: must be a finite number"
-        )),
-        None => Err(format!(
-            "parameters.{key}: a range needs from, to and count; {name} is missing"
-        )),
-    };
-    let (from, to) = (number("from")?, number("to")?);
+    let (from, to) = ends(key, table, "from, to and count")?;
     let count = match table.get("count") {
         Some(toml::Value::Integer(n)) if (1..=MAX_CASES as i64).contains(n) => *n as usize,
         Some(other) => {
@@ -401,6 +493,41 @@ fn range(key: &str, table: &toml::Table) -> Result<Values, String> {
         ));
     }
     Ok(Values::Range { from, to, count })
+}
+
+/// A sampled design's range `{ from = a, to = b }`: finite ends, any value between them; a
+/// `count` is refused, since the design, not a list of evenly spaced values, picks them.
+fn interval(key: &str, table: &toml::Table, method: Method) -> Result<Values, String> {
+    if table.contains_key("count") {
+        return Err(format!(
+            "parameters.{key}.count: a {} design draws each case's value from anywhere between              from and to, so a range has no count; give {{ from = a, to = b }}, or a list of              the values to pick from",
+            method.name()
+        ));
+    }
+    if let Some(unknown) = table.keys().find(|k| !["from", "to"].contains(&k.as_str())) {
+        return Err(format!(
+            "parameters.{key}.{unknown}: a range of a {} design has from and to only",
+            method.name()
+        ));
+    }
+    let (from, to) = ends(key, table, "from and to")?;
+    Ok(Values::Interval { from, to })
+}
+
+/// The `from` and `to` of a range, finite numbers; `needs` says what a range has, for the
+/// message when one is missing.
+fn ends(key: &str, table: &toml::Table, needs: &str) -> Result<(f64, f64), String> {
+    let number = |name: &str| match table.get(name) {
+        Some(toml::Value::Float(x)) if x.is_finite() => Ok(*x),
+        Some(toml::Value::Integer(i)) => Ok(*i as f64),
+        Some(other) => Err(format!(
+            "parameters.{key}.{name} = {other}: must be a finite number"
+        )),
+        None => Err(format!(
+            "parameters.{key}: a range needs {needs}; {name} is missing"
+        )),
+    };
+    Ok((number("from")?, number("to")?))
 }
 
 /// The number of cases, the product of the parameters' counts, refused above [`MAX_CASES`]
@@ -446,7 +573,7 @@ mod tests {
     use super::*;
 
     fn parsed(text: &str) -> Result<Vec<Parameter>, String> {
-        parameters(&toml::from_str(text).unwrap())
+        parameters(&toml::from_str(text).unwrap(), Method::FullFactorial)
     }
 
     /// Ranges include both ends; lists keep their order; nested and quoted keys are the same.
@@ -506,6 +633,144 @@ mod tests {
         assert!(e.contains("1001000 cases"), "{e}");
         let e = cases_count(&vec![range(MAX_CASES); 5]).unwrap_err();
         assert!(e.contains("1e30 cases"), "{e}");
+    }
+
+    /// A study on the hemisphere example, from text, with `design` and `parameters` lines.
+    fn sampled_study(design: &str, parameters: &str) -> Result<Study, StudyError> {
+        let repo = Path::new(env!("CARGO_MANIFEST_DIR"));
+        let text = format!(
+            "base = \"examples/hemisphere.toml\"\n[design]\n{design}\n[parameters]\n{parameters}\n\
+             [output]\nfolder = \"out\"\n"
+        );
+        Study::from_text(&text, "sampled.toml", repo, Path::new("/tmp/runs"))
+    }
+
+    const TWO_RANGES_AND_A_LIST: &str = "process.temperature = { from = 280.0, to = 320.0 }\n\
+        process.blank_holder_force = { from = 0.0, to = 300.0 }\n\
+        process.punch_speed = [5.0, 10.0, 20.0]";
+
+    fn column(study: &Study, j: usize) -> Vec<f64> {
+        study
+            .cases()
+            .map(|c| number(&c.values[j]).unwrap())
+            .collect()
+    }
+
+    /// The stratum of each value among `n` equal strata of [from, to].
+    fn strata(values: &[f64], (from, to): (f64, f64), n: usize) -> Vec<usize> {
+        let mut s: Vec<usize> = values
+            .iter()
+            .map(|v| (((v - from) / (to - from) * n as f64).floor() as usize).min(n - 1))
+            .collect();
+        s.sort_unstable();
+        s
+    }
+
+    /// `from_text` resolves the base against its folder and the output against the run's.
+    #[test]
+    fn a_study_from_text_resolves_its_paths() {
+        let study = sampled_study("", "process.temperature = [300.0]").unwrap();
+        assert_eq!(
+            study.base,
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/hemisphere.toml")
+        );
+        assert_eq!(study.folder, Path::new("/tmp/runs/out"));
+        assert_eq!(study.design, Design::FullFactorial);
+    }
+
+    /// A Latin hypercube of 16 cases: each range's 16 equal strata hold one case each, the
+    /// values are floats within the range, and the list's values are the only ones taken,
+    /// each about a third of the time (16 strata over 3 values: 4 to 6 cases each).
+    #[test]
+    fn a_latin_hypercube_study_stratifies_its_ranges() {
+        let study = sampled_study(
+            "method = \"latin-hypercube\"\nsamples = 16\nseed = 7",
+            TWO_RANGES_AND_A_LIST,
+        )
+        .unwrap();
+        assert_eq!(study.cases_count(), 16);
+        assert_eq!(study.case(17), None);
+        let all: Vec<usize> = (0..16).collect();
+        for (j, span) in [(0, (280.0, 320.0)), (1, (0.0, 300.0))] {
+            let values = column(&study, j);
+            assert!(
+                values.iter().all(|v| (span.0..=span.1).contains(v)),
+                "{values:?}"
+            );
+            assert_eq!(strata(&values, span, 16), all, "parameter {j}: {values:?}");
+        }
+        assert!(study.cases().all(|c| c.values[0].is_float()));
+        let speeds = column(&study, 2);
+        for listed in [5.0, 10.0, 20.0] {
+            let n = speeds.iter().filter(|v| **v == listed).count();
+            assert!((4..=6).contains(&n), "{listed}: {speeds:?}");
+        }
+    }
+
+    /// The same seed gives the same cases from two loads; another seed, other cases.
+    #[test]
+    fn the_seed_decides_the_cases() {
+        for method in ["latin-hypercube", "sobol"] {
+            let design = |seed: u64| format!("method = \"{method}\"\nsamples = 8\nseed = {seed}");
+            let cases = |seed| {
+                sampled_study(&design(seed), TWO_RANGES_AND_A_LIST)
+                    .unwrap()
+                    .cases()
+                    .collect::<Vec<_>>()
+            };
+            assert_eq!(cases(7), cases(7), "{method}");
+            assert_ne!(cases(7), cases(8), "{method}");
+        }
+    }
+
+    /// A Sobol study's values lie in their ranges, and its first 2^k cases put one value in
+    /// each of 2^k equal intervals of each range.
+    #[test]
+    fn a_sobol_study_stratifies_its_prefixes() {
+        let study = sampled_study(
+            "method = \"sobol\"\nsamples = 32\nseed = 3",
+            TWO_RANGES_AND_A_LIST,
+        )
+        .unwrap();
+        for (j, span) in [(0, (280.0, 320.0)), (1, (0.0, 300.0))] {
+            let values = column(&study, j);
+            assert!(
+                values.iter().all(|v| (span.0..span.1).contains(v)),
+                "{values:?}"
+            );
+            for k in 0..=5 {
+                let n = 1 << k;
+                let expected: Vec<usize> = (0..n).collect();
+                assert_eq!(
+                    strata(&values[..n], span, n),
+                    expected,
+                    "2^{k}, parameter {j}"
+                );
+            }
+        }
+        assert!(column(&study, 2)
+            .iter()
+            .all(|v| [5.0, 10.0, 20.0].contains(v)));
+    }
+
+    /// A sampled design refuses a counted range, naming the key and saying why; the full
+    /// factorial refuses samples.
+    #[test]
+    fn designs_refuse_what_they_do_not_take() {
+        let e = sampled_study(
+            "method = \"sobol\"\nsamples = 8",
+            "process.temperature = { from = 280.0, to = 320.0, count = 3 }",
+        )
+        .unwrap_err();
+        assert!(
+            e.message.contains("parameters.process.temperature.count")
+                && e.message.contains("no count"),
+            "{e}"
+        );
+        let e = sampled_study("samples = 8", "process.temperature = [300.0]").unwrap_err();
+        assert!(e.message.contains("design.samples"), "{e}");
+        let e = sampled_study("method = \"sobol\"", "process.temperature = [300.0]").unwrap_err();
+        assert!(e.message.contains("design.samples is missing"), "{e}");
     }
 
     /// A range and the list of its values are the same values.

@@ -1,10 +1,13 @@
 //! Which study a study folder holds: `study-identity.toml`, written when a study first takes
-//! the folder, records the study's parameters (their values, in order) and its base scenario
-//! (standalone, as each case's own scenario is built from it). A case folder is named by its
-//! number alone, and case 7 of one study is not case 7 of another: a study whose parameters or
-//! base scenario differ from the record is refused, so that one folder never mixes the cases
-//! of two studies, nor lists one's with the other's parameters.
+//! the folder, records the study's parameters (their values, in order), its design (a sampled
+//! one's method, number of cases and seed; nothing for the full factorial, whose record is
+//! what it was before designs existed) and its base scenario (standalone, as each case's own
+//! scenario is built from it). A case folder is named by its number alone, and case 7 of one
+//! study is not case 7 of another: a study whose parameters, design or base scenario differ
+//! from the record is refused, so that one folder never mixes the cases of two studies, nor
+//! lists one's with the other's parameters.
 
+use super::design::{DesignSection, Method};
 use super::file::{parameters, Study, StudyError};
 use crate::forming::Scenario;
 use crate::io::product_file;
@@ -13,12 +16,14 @@ use std::path::{Path, PathBuf};
 /// The record of the study a folder holds.
 pub const IDENTITY_FILE: &str = "study-identity.toml";
 
-/// What identifies a study: its parameters and its base scenario.
+/// What identifies a study: its parameters, its design and its base scenario.
 struct Identity {
     /// The study file it was recorded from (named in messages only: the same study may be
     /// run from a copy of its file).
     study: String,
     parameters: toml::Table,
+    /// The `[design]` table; `None` for the full factorial.
+    design: Option<toml::Table>,
     base: toml::Table,
 }
 
@@ -83,24 +88,31 @@ fn identity(study: &Study) -> Result<Identity, StudyError> {
     Ok(Identity {
         study: study.origin.clone(),
         parameters,
+        design: study.design.as_written(),
         base,
     })
 }
 
-/// The record's text.
+/// The record's text. The parameters are written one line each, in their order, a range as
+/// an inline table: written as tables of their own, TOML puts them after every list, and the
+/// record read back would hold the parameters in another order than the study's.
 fn text(identity: &Identity) -> String {
-    let mut table = toml::Table::new();
-    table.insert("study".into(), toml::Value::String(identity.study.clone()));
-    table.insert(
-        "parameters".into(),
-        toml::Value::Table(identity.parameters.clone()),
-    );
-    table.insert("base".into(), toml::Value::Table(identity.base.clone()));
+    let study = toml::Value::String(identity.study.clone());
+    let parameters: String = identity
+        .parameters
+        .iter()
+        .map(|(key, values)| format!("{} = {values}\n", toml::Value::String(key.clone())))
+        .collect();
+    let mut rest = toml::Table::new();
+    if let Some(design) = &identity.design {
+        rest.insert("design".into(), toml::Value::Table(design.clone()));
+    }
+    rest.insert("base".into(), toml::Value::Table(identity.base.clone()));
     format!(
         "# The study whose cases this folder holds, recorded by `thermostamp sweep` \
          (docs/study.md):\n# a sweep of a study with other parameters or another base scenario \
-         into this folder is refused.\n{}",
-        toml::to_string(&table).unwrap_or_default()
+         into this folder is refused.\nstudy = {study}\n\n[parameters]\n{parameters}\n{}",
+        toml::to_string(&rest).unwrap_or_default()
     )
 }
 
@@ -130,6 +142,11 @@ fn read(study: &Study) -> Result<Option<Identity>, StudyError> {
         _ => Err(unreadable(format!("no [{name}]"))),
     };
     let (parameters, base) = (section("parameters")?, section("base")?);
+    let design = match table.remove("design") {
+        None => None,
+        Some(toml::Value::Table(t)) => Some(t),
+        Some(_) => return Err(unreadable("[design] is not a table".into())),
+    };
     let recorded_study = match table.remove("study") {
         Some(toml::Value::String(s)) => s,
         _ => "?".into(),
@@ -137,6 +154,7 @@ fn read(study: &Study) -> Result<Option<Identity>, StudyError> {
     Ok(Some(Identity {
         study: recorded_study,
         parameters,
+        design,
         base,
     }))
 }
@@ -144,7 +162,17 @@ fn read(study: &Study) -> Result<Option<Identity>, StudyError> {
 /// Refused where `recorded` is another study than `ours`, naming its file, the record and what
 /// differs.
 fn compare(study: &Study, ours: &Identity, recorded: &Identity) -> Result<(), StudyError> {
-    let difference = if !same_parameters(&ours.parameters, &recorded.parameters) {
+    let recorded_method = recorded
+        .design
+        .as_ref()
+        .map_or(Ok(Method::FullFactorial), |d| {
+            DesignSection::from_table(d).and_then(|s| s.method())
+        });
+    let difference = if ours.design != recorded.design {
+        "its design differs"
+    } else if !recorded_method
+        .is_ok_and(|method| same_parameters(&ours.parameters, &recorded.parameters, method))
+    {
         "its parameters differ"
     } else if ours.base != recorded.base {
         "its base scenario differs"
@@ -163,9 +191,10 @@ fn compare(study: &Study, ours: &Identity, recorded: &Identity) -> Result<(), St
     ))
 }
 
-/// The same keys in the same order, each with the same values, however written.
-fn same_parameters(ours: &toml::Table, recorded: &toml::Table) -> bool {
-    match (parameters(ours), parameters(recorded)) {
+/// The same keys in the same order, each with the same values, however written (ranges read
+/// as the design `method` reads them).
+fn same_parameters(ours: &toml::Table, recorded: &toml::Table, method: Method) -> bool {
+    match (parameters(ours, method), parameters(recorded, method)) {
         (Ok(a), Ok(b)) => {
             a.len() == b.len()
                 && a.iter()

@@ -1,5 +1,7 @@
 //! Running a study's cases (docs/study.md): each case is `thermostamp run` of its own scenario
-//! file in its own folder, a child process whose output goes to the folder's `run.log`. When
+//! file in its own folder, a child process whose output goes to the folder's `run.log`
+//! ([`run_case`]); another front end (one that forms in its own process) gives its own way of
+//! running the scenario to [`run_case_with`] and keeps the same folders and records. When
 //! it ends, the case's outcome is written to `case-result.toml` in one step (written aside,
 //! then renamed): a folder with that file is a finished case and is not run again; a folder
 //! without it (a sweep killed part-way) is cleared and its case run again from the start.
@@ -10,7 +12,7 @@ use super::file::{Case, Study};
 use crate::io::output_folder::{lock_folder, FolderError, Hold, LOCK_FILE};
 use crate::io::product_file;
 use serde::{Deserialize, Serialize};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
@@ -49,6 +51,31 @@ pub fn finished(folder: &Path) -> Option<CaseResult> {
     toml::from_str(&text).ok()
 }
 
+/// What a case's run is given: the case's scenario file (written, standalone), the folder its
+/// results go to (the case's own, cleared, its lock held), the threads it may use, and its log
+/// file (created empty; the runner writes the run's output into it).
+#[derive(Clone, Debug, PartialEq)]
+pub struct CaseRun {
+    pub scenario: PathBuf,
+    pub folder: PathBuf,
+    pub threads: usize,
+    pub log: PathBuf,
+}
+
+/// How a case's run ended: whether it succeeded, its standard-error text (the failure reason is
+/// its last error or warning line) and its exit code, if it had one (`None`: killed by a
+/// signal, or a run in the same process).
+#[derive(Clone, Debug, PartialEq)]
+pub struct RunEnd {
+    pub success: bool,
+    pub stderr: String,
+    pub exit_code: Option<i32>,
+}
+
+/// A way of running a case's scenario: an error is a run that could not even be started (it
+/// ends the sweep), not a run that failed (a [`RunEnd`] without success, recorded).
+pub type CaseRunner<'a> = dyn Fn(&CaseRun) -> anyhow::Result<RunEnd> + Sync + 'a;
+
 /// Runs `case` from the start in its folder with `exe run` (the thermostamp executable) on
 /// the study's threads per case, and records how it ended; `command` is the command line the
 /// case's lock records. Errors: the case is being run by another process, its folder is a
@@ -58,6 +85,46 @@ pub fn run_case(
     case: &Case,
     exe: &Path,
     command: &str,
+) -> anyhow::Result<CaseResult> {
+    run_case_with(study, case, command, &|run: &CaseRun| spawn_run(exe, run))
+}
+
+/// Runs `run.scenario` as a child process `exe run SCENARIO --output FOLDER --threads T`: its
+/// standard output into the log as it comes, then its standard error appended.
+pub fn spawn_run(exe: &Path, run: &CaseRun) -> anyhow::Result<RunEnd> {
+    let log = product_file::append(&run.log).map_err(|e| cannot_write(&run.log, e))?;
+    let output = Command::new(exe)
+        .arg("run")
+        .arg(&run.scenario)
+        .arg("--output")
+        .arg(&run.folder)
+        .arg("--threads")
+        .arg(run.threads.to_string())
+        .stdout(log)
+        .stderr(Stdio::piped())
+        .output()
+        .map_err(|e| anyhow::anyhow!("cannot start {}: {e}", exe.display()))?;
+    let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
+    product_file::append(&run.log)
+        .and_then(|mut f| std::io::Write::write_all(&mut f, stderr.as_bytes()))
+        .map_err(|e| cannot_write(&run.log, e))?;
+    Ok(RunEnd {
+        success: output.status.success(),
+        stderr,
+        exit_code: output.status.code(),
+    })
+}
+
+/// Runs `case` from the start in its folder with `run` and records how it ended: takes the
+/// case's lock (`command` is the command line it records), clears what an unfinished try
+/// left, writes the case's standalone `scenario.toml` and an empty `run.log`, calls `run`, and
+/// writes `case-result.toml` in one step. Errors: the case is being run by another process,
+/// its folder is a symbolic link or cannot be written, `run` could not start the run.
+pub fn run_case_with(
+    study: &Study,
+    case: &Case,
+    command: &str,
+    run: &CaseRunner,
 ) -> anyhow::Result<CaseResult> {
     let folder = study.case_folder(case.number);
     if let Some(link) = product_file::link_at(&folder) {
@@ -81,34 +148,21 @@ pub fn run_case(
         study.base.display()
     );
     write(&scenario, &format!("{header}{text}"))?;
-    let log_path = folder.join(CASE_LOG);
-    let log = product_file::create(&log_path).map_err(|e| cannot_write(&log_path, e))?;
+    let log = folder.join(CASE_LOG);
+    product_file::create(&log).map_err(|e| cannot_write(&log, e))?;
     let start = Instant::now();
-    let output = Command::new(exe)
-        .arg("run")
-        .arg(&scenario)
-        .arg("--output")
-        .arg(&folder)
-        .arg("--threads")
-        .arg(study.threads_per_case.to_string())
-        .stdout(log)
-        .stderr(Stdio::piped())
-        .output()
-        .map_err(|e| anyhow::anyhow!("cannot start {}: {e}", exe.display()))?;
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    product_file::append(&log_path)
-        .and_then(|mut f| std::io::Write::write_all(&mut f, stderr.as_bytes()))
-        .map_err(|e| cannot_write(&log_path, e))?;
+    let end = run(&CaseRun {
+        scenario,
+        folder: folder.clone(),
+        threads: study.threads_per_case,
+        log,
+    })?;
     let result = CaseResult {
-        status: if output.status.success() {
-            "done".into()
-        } else {
-            "failed".into()
-        },
-        reason: if output.status.success() {
+        status: if end.success { "done" } else { "failed" }.into(),
+        reason: if end.success {
             String::new()
         } else {
-            failure_reason(&stderr, output.status.code())
+            failure_reason(&end.stderr, end.exit_code)
         },
         wall_seconds: start.elapsed().as_secs_f64(),
     };
@@ -176,15 +230,30 @@ pub struct Finished<'a> {
     pub elapsed: f64,
 }
 
-/// Runs the cases numbered `numbers` on `jobs` cases at a time, calling `report` as each one
-/// finishes (in the order they finish); `command` is the command line their locks record. A
-/// case that cannot even be started is an error that ends the sweep after the running cases.
+/// Runs the cases numbered `numbers` with `exe run` on `jobs` cases at a time ([`run_case`]),
+/// calling `report` as each one finishes; see [`run_cases_with`].
 pub fn run_cases(
     study: &Study,
     numbers: &[usize],
     jobs: usize,
     exe: &Path,
     command: &str,
+    report: &(dyn Fn(Finished) + Sync),
+) -> anyhow::Result<Vec<(usize, CaseResult)>> {
+    let spawn = |run: &CaseRun| spawn_run(exe, run);
+    run_cases_with(study, numbers, jobs, command, &spawn, report)
+}
+
+/// Runs the cases numbered `numbers` with `run` ([`run_case_with`]) on `jobs` cases at a
+/// time, calling `report` as each one finishes (in the order they finish); `command` is the
+/// command line their locks record. A case that cannot even be started is an error that ends
+/// the sweep after the running cases.
+pub fn run_cases_with(
+    study: &Study,
+    numbers: &[usize],
+    jobs: usize,
+    command: &str,
+    run: &CaseRunner,
     report: &(dyn Fn(Finished) + Sync),
 ) -> anyhow::Result<Vec<(usize, CaseResult)>> {
     /// The cases finished so far, and the first case that could not be run.
@@ -209,7 +278,7 @@ pub fn run_cases(
                     let Some(case) = study.case(number) else {
                         continue;
                     };
-                    let outcome = run_case(study, &case, exe, command);
+                    let outcome = run_case_with(study, &case, command, run);
                     let mut p = lock();
                     match outcome {
                         Ok(result) => {

@@ -3,7 +3,8 @@
 //! the waviness and the largest shear angle over the parameters. Rebuilt from the case folders
 //! alone, so that a sweep spread over several processes or machines has one summary.
 
-use super::file::{Case, Study};
+use super::design::Design;
+use super::file::{number, Case, Study};
 use super::run::{finished, CaseResult};
 use crate::forming::run::{RESULT_COLUMNS, RESULT_CSV};
 use crate::io::output_folder::ProductFiles;
@@ -168,23 +169,18 @@ pub fn value_text(v: &toml::Value) -> String {
 
 /// The charts of the waviness and of the largest shear angle: over the first two parameters a
 /// heat map each (the other parameters at their first values), wrinkled cases flagged and
-/// failed ones grey; over one parameter (or a non-numeric second one) a line chart each.
+/// failed ones grey; over one parameter (or a non-numeric second one) a line chart each. A
+/// sampled design's cases lie on no grid: a scatter of them each ([`scatter`]).
 fn write_charts(study: &Study, rows: &[Row]) -> anyhow::Result<Vec<PathBuf>> {
+    if matches!(study.design, Design::Sampled(_)) {
+        return write_scatters(study, rows);
+    }
     let numeric = |i: usize| {
         study
             .parameters
             .get(i)
             .is_some_and(|p| p.values.iter().all(|v| number(&v).is_some()))
     };
-    let charts = [
-        (
-            "waviness",
-            "flange waviness (mm)",
-            Some(study.wrinkle_threshold),
-            CHARTS[0],
-        ),
-        ("max_shear_deg", "largest shear angle (°)", None, CHARTS[1]),
-    ];
     let mut files = Vec::new();
     // cases whose parameters beyond the first two are at their first values
     let first_of_rest = |r: &&Row| {
@@ -196,7 +192,7 @@ fn write_charts(study: &Study, rows: &[Row]) -> anyhow::Result<Vec<PathBuf>> {
             .all(|(v, p)| Some(v) == p.values.get(0).as_ref())
     };
     let shown: Vec<&Row> = rows.iter().filter(first_of_rest).collect();
-    for (measure, label, flag, name) in charts {
+    for (measure, label, flag, name) in charts(study) {
         let path = study.folder.join(chart_name(name));
         let _ = std::fs::remove_file(&path);
         if !shown
@@ -222,12 +218,157 @@ fn write_charts(study: &Study, rows: &[Row]) -> anyhow::Result<Vec<PathBuf>> {
     Ok(files)
 }
 
-fn number(v: &toml::Value) -> Option<f64> {
-    match v {
-        toml::Value::Float(f) => Some(*f),
-        toml::Value::Integer(i) => Some(*i as f64),
-        _ => None,
+/// Each chart: the measure, its label with units, the waviness above which a case is flagged
+/// as wrinkled, and the chart's name.
+fn charts(study: &Study) -> [(&'static str, &'static str, Option<f64>, &'static str); 2] {
+    [
+        (
+            "waviness",
+            "flange waviness (mm)",
+            Some(study.wrinkle_threshold),
+            CHARTS[0],
+        ),
+        ("max_shear_deg", "largest shear angle (°)", None, CHARTS[1]),
+    ]
+}
+
+/// The charts of a sampled design: a scatter each over the first two numeric parameters that
+/// vary (a parameter of one value would stack every dot on one line), or over the first and
+/// the measure where only one varies; none where no parameter is a number.
+fn write_scatters(study: &Study, rows: &[Row]) -> anyhow::Result<Vec<PathBuf>> {
+    let spans: Vec<(usize, (f64, f64))> = study
+        .parameters
+        .iter()
+        .enumerate()
+        .filter_map(|(i, p)| Some((i, p.values.span()?)))
+        .collect();
+    let varied: Vec<(usize, (f64, f64))> = spans
+        .iter()
+        .copied()
+        .filter(|(_, (low, high))| high > low)
+        .collect();
+    let x = varied.first().or(spans.first()).copied();
+    let y = varied.get(1).copied();
+    let mut files = Vec::new();
+    for (measure, label, flag, name) in charts(study) {
+        let path = study.folder.join(chart_name(name));
+        let _ = std::fs::remove_file(&path);
+        if !rows
+            .iter()
+            .any(|r| r.status == "done" && r.measure(measure).is_some())
+        {
+            continue;
+        }
+        let Some(x) = x else {
+            continue;
+        };
+        let chart = scatter(study, rows, (measure, label, flag), x, y);
+        write_map_png(&path, &chart, 900, 700)?;
+        files.push(path);
     }
+    Ok(files)
+}
+
+/// A sampled design's cases as dots coloured by the measure (its name, label and the value
+/// that flags a case), on the heat maps' colour scale: over the parameters `x` and `y` (each
+/// its place among the parameters and its span), failed and unrun cases grey; or, without
+/// `y`, over `x` and the measure itself, where a case without a value has no place (the
+/// legend counts them). Wrinkled cases ringed in black, as the heat maps outline them. The
+/// axes span the parameters' ranges with a margin, so that a dot at an end is whole.
+fn scatter(
+    study: &Study,
+    rows: &[Row],
+    (measure, label, flag): (&str, &str, Option<f64>),
+    (x_index, x_span): (usize, (f64, f64)),
+    y: Option<(usize, (f64, f64))>,
+) -> MapPlot {
+    let y_span = y.map(|(_, span)| span);
+    let value_of = |r: &Row| {
+        if r.status == "done" {
+            r.measure(measure).unwrap_or(f64::NAN)
+        } else {
+            f64::NAN
+        }
+    };
+    let mut dots = Vec::new();
+    let mut values = Vec::new();
+    let mut missing = 0;
+    for r in rows {
+        let value = value_of(r);
+        let at_x = r.case.values.get(x_index).and_then(number);
+        let at_y = match y {
+            Some((y_index, _)) => r.case.values.get(y_index).and_then(number),
+            None => Some(value).filter(|v| v.is_finite()),
+        };
+        match (at_x, at_y) {
+            (Some(x), Some(y)) => {
+                dots.push(vec![(x, y)]);
+                values.push(value);
+            }
+            _ => missing += 1,
+        }
+    }
+    // the measure's axis from 0 (where the colour scale starts) to its largest value
+    let measured = values.iter().copied().filter(|v| v.is_finite());
+    let measured_span = (
+        measured.clone().fold(0.0, f64::min),
+        measured.fold(0.0, f64::max),
+    );
+    let y_title = match y {
+        Some((y_index, _)) => parameter_title(&study.parameters[y_index].key),
+        None => label.to_string(),
+    };
+    let design = match &study.design {
+        Design::Sampled(s) => format!(
+            ", {} cases of {} (seed {})",
+            rows.len(),
+            s.method.name(),
+            s.seed
+        ),
+        Design::FullFactorial => String::new(),
+    };
+    let outlined = values
+        .iter()
+        .map(|v| flag.is_some_and(|f| *v > f))
+        .collect();
+    let mut map = MapPlot::new(format!("Study: {label}{design}"), label, dots, values);
+    map.dots = true;
+    map.equal_scales = false;
+    map.extent = Some((padded(x_span), padded(y_span.unwrap_or(measured_span))));
+    map.axes = Some((parameter_title(&study.parameters[x_index].key), y_title));
+    map.outlined = outlined;
+    if let Some(f) = flag {
+        map.legend.push(LegendCell {
+            label: format!("wrinkled: waviness above {f} mm"),
+            fill: None,
+            outlined: true,
+        });
+    }
+    let RGBColor(r, g, b) = MISSING_COLOUR;
+    let missing_label = match y_span {
+        Some(_) => "failed or not run".to_string(),
+        None => format!("failed or not run: {missing} case(s), not shown"),
+    };
+    map.legend.push(LegendCell {
+        label: missing_label,
+        fill: Some((r, g, b)),
+        outlined: false,
+    });
+    map
+}
+
+/// A span widened by 6 % of its length at each end (an empty span by a unit, or by 6 % of
+/// its value), so that dots at its ends are drawn whole.
+fn padded((low, high): (f64, f64)) -> std::ops::Range<f64> {
+    let length = high - low;
+    let margin = if length > 0.0 {
+        0.06 * length
+    } else if low != 0.0 {
+        0.06 * low.abs()
+    } else {
+        1.0
+    };
+    low - margin..high + margin
 }
 
 /// A cell per case at the places of its first two parameters among their values (equal
