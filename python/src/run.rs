@@ -55,7 +55,7 @@ pub fn run_scenario(
 
 /// A rayon pool of `threads` workers (cut to the cores), `None` for the global pool of all
 /// cores.
-fn worker_pool(py: Python<'_>, threads: Option<usize>) -> PyResult<Option<rayon::ThreadPool>> {
+pub fn worker_pool(py: Python<'_>, threads: Option<usize>) -> PyResult<Option<rayon::ThreadPool>> {
     let Some(requested) = threads else {
         return Ok(None);
     };
@@ -71,20 +71,22 @@ fn worker_pool(py: Python<'_>, threads: Option<usize>) -> PyResult<Option<rayon:
 
 /// Why a run did not even start: a scenario the model cannot be built from, or an output
 /// folder that cannot be taken.
-enum Failure {
+pub enum Failure {
     Setup(String),
     Output(anyhow::Error),
 }
 
 /// A run that started, and what it wrote.
-struct Done {
-    forming: FormingModel,
-    run: FormingRun,
-    files: Vec<PathBuf>,
-    raised: Option<PyErr>,
+pub struct Done {
+    pub forming: FormingModel,
+    pub run: FormingRun,
+    pub files: Vec<PathBuf>,
+    pub raised: Option<PyErr>,
 }
 
-fn form(
+/// Builds the model of `scenario` and runs it, writing into `output` (taken with `command`
+/// for its lock) when given.
+pub fn form(
     scenario: &Scenario,
     output: Option<&Path>,
     progress: Option<&Py<PyAny>>,

@@ -107,7 +107,7 @@ fn to_toml(object: &Bound<'_, PyAny>, key: &str) -> Result<toml::Value, String> 
     ))
 }
 
-fn to_python<'py>(py: Python<'py>, value: &toml::Value) -> PyResult<Bound<'py, PyAny>> {
+pub fn to_python<'py>(py: Python<'py>, value: &toml::Value) -> PyResult<Bound<'py, PyAny>> {
     use pyo3::IntoPyObjectExt;
     Ok(match value {
         toml::Value::String(s) => s.into_bound_py_any(py)?,

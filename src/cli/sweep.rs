@@ -3,7 +3,9 @@
 //! `--emit slurm`, the job-array script that runs its cases on a cluster.
 
 use super::shared::command_line;
-use crate::study::run::{finished, run_cases, CaseResult, Finished, CASE_LOG};
+use crate::study::run::{
+    case_status, finished, run_cases, unfinished, CaseResult, Finished, CASE_LOG,
+};
 use crate::study::summary::{rows, write_summary, Row, SUMMARY_CSV};
 use crate::study::{folder, identity, Study};
 use std::io::Write;
@@ -187,16 +189,6 @@ fn run_one(study: &Study, n: usize, command: &str) -> anyhow::Result<()> {
     }
 }
 
-/// The cases without a result, in order.
-fn unfinished(study: &Study) -> Vec<usize> {
-    if !study.folder.exists() {
-        return (1..=study.cases_count()).collect();
-    }
-    (1..=study.cases_count())
-        .filter(|&n| finished(&study.case_folder(n)).is_none())
-        .collect()
-}
-
 /// Writes and prints the summary from the case folders (the study's folder held whole). An
 /// error (exit code 1) when a case failed, or, where `missing_too`, when a case has not run.
 fn summarise(study: &Study, missing_too: bool) -> anyhow::Result<()> {
@@ -340,13 +332,7 @@ fn list(study: &Study) -> anyhow::Result<()> {
     let mut out = std::io::BufWriter::new(std::io::stdout().lock());
     let folder_exists = study.folder.exists();
     for case in study.cases() {
-        let folder = study.case_folder(case.number);
-        let status = match folder_exists.then(|| finished(&folder)).flatten() {
-            Some(r) if r.done() => "done".to_string(),
-            Some(r) => format!("failed: {}", r.reason),
-            None if folder_exists && folder.exists() => "not finished".into(),
-            None => "not run".into(),
-        };
+        let status = case_status(study, case.number, folder_exists);
         writeln!(
             out,
             "{:>4}  {}  {status}",

@@ -76,6 +76,29 @@ pub struct RunEnd {
 /// ends the sweep), not a run that failed (a [`RunEnd`] without success, recorded).
 pub type CaseRunner<'a> = dyn Fn(&CaseRun) -> anyhow::Result<RunEnd> + Sync + 'a;
 
+/// The cases without a result, in order.
+pub fn unfinished(study: &Study) -> Vec<usize> {
+    if !study.folder.exists() {
+        return (1..=study.cases_count()).collect();
+    }
+    (1..=study.cases_count())
+        .filter(|&n| finished(&study.case_folder(n)).is_none())
+        .collect()
+}
+
+/// How case `number` stands, as `sweep --list` shows it: `done`, `failed: <reason>`, `not
+/// finished` (a folder without a result: stopped part-way, or running) or `not run`;
+/// `folder_exists` is whether the study's folder exists (looked at once for all cases).
+pub fn case_status(study: &Study, number: usize, folder_exists: bool) -> String {
+    let folder = study.case_folder(number);
+    match folder_exists.then(|| finished(&folder)).flatten() {
+        Some(r) if r.done() => "done".to_string(),
+        Some(r) => format!("failed: {}", r.reason),
+        None if folder_exists && folder.exists() => "not finished".into(),
+        None => "not run".into(),
+    }
+}
+
 /// Runs `case` from the start in its folder with `exe run` (the thermostamp executable) on
 /// the study's threads per case, and records how it ended; `command` is the command line the
 /// case's lock records. Errors: the case is being run by another process, its folder is a
