@@ -22,6 +22,12 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     Ok(())
 }
 
+/// Python's spelling of an option in messages: `time_scaling` for the command line's
+/// `--time-scaling`.
+fn python_names(option: &str) -> String {
+    option.replace('-', "_")
+}
+
 /// The material card at `path`, or `InputError` with the command line's message.
 pub fn load_card(py: Python<'_>, path: &std::path::Path) -> PyResult<MaterialCard> {
     MaterialCard::load(path).map_err(|e| input_error(py, e))

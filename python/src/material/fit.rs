@@ -2,7 +2,7 @@
 //! ...` in this process, each curve a CSV file or a table from Python (handed over as CSV
 //! text with every digit of its values).
 
-use super::columns_dict;
+use super::{columns_dict, python_names};
 use crate::errors::{input_error, output_error};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -22,11 +22,6 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(fit_matrix, m)?)?;
     m.add_function(wrap_pyfunction!(fit_shear, m)?)?;
     Ok(())
-}
-
-/// Python's spelling of an option: `time_scaling`.
-fn python_names(option: &str) -> String {
-    option.replace('-', "_")
 }
 
 const NAMES: OptionNames = python_names;

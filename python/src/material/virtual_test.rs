@@ -2,7 +2,7 @@
 //! of `thermostamp test ...` in this process, the interpreter free while they run, progress
 //! and Ctrl-C as `thermostamp.run` has them.
 
-use super::columns_dict;
+use super::{columns_dict, python_names};
 use crate::errors::{input_error, output_error};
 use crate::run::{outcome_kind, worker_pool, Watch};
 use pyo3::prelude::*;
@@ -17,11 +17,6 @@ use thermostamp::solver::SolverKind;
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(virtual_test, m)?)?;
     Ok(())
-}
-
-/// Python's spelling of an option: `time_scaling`.
-fn python_names(option: &str) -> String {
-    option.replace('-', "_")
 }
 
 /// Runs the virtual test `kind` (`uniaxial`, `bias-extension`, `picture-frame`) on the card at
