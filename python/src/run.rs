@@ -55,7 +55,10 @@ pub fn run_scenario(
 
 /// A rayon pool of `threads` workers (cut to the cores), `None` for the global pool of all
 /// cores.
-pub fn worker_pool(py: Python<'_>, threads: Option<usize>) -> PyResult<Option<rayon::ThreadPool>> {
+pub fn worker_pool(
+    py: Python<'_>,
+    threads: Option<usize>,
+) -> PyResult<Option<rayon::ThreadPool>> {
     let Some(requested) = threads else {
         return Ok(None);
     };
@@ -125,17 +128,17 @@ pub fn form(
 
 /// The run's progress handed to the Python callable, and the signals Python has pending:
 /// looked at every [`PROGRESS_EVERY`], the interpreter taken for as long as that takes.
-struct Watch<'a> {
+pub(crate) struct Watch<'a> {
     callback: Option<&'a Py<PyAny>>,
     end_time: f64,
     time_scaling: f64,
     last: Option<Instant>,
     /// What stopped the run: `KeyboardInterrupt` or an exception of the callable.
-    raised: Option<PyErr>,
+    pub(crate) raised: Option<PyErr>,
 }
 
 impl<'a> Watch<'a> {
-    fn new(callback: Option<&'a Py<PyAny>>, end_time: f64, time_scaling: f64) -> Self {
+    pub(crate) fn new(callback: Option<&'a Py<PyAny>>, end_time: f64, time_scaling: f64) -> Self {
         Self {
             callback,
             end_time,
@@ -222,7 +225,7 @@ fn result_dict<'py>(
 
 /// `finished`, `interrupted`, `output` (a result could not be written) or `failed` (the solver
 /// or a check stopped the run, results so far kept).
-fn outcome_kind<T>(outcome: &Result<T, SolverError>) -> &'static str {
+pub(crate) fn outcome_kind<T>(outcome: &Result<T, SolverError>) -> &'static str {
     match outcome {
         Ok(_) => "finished",
         Err(SolverError::Interrupted { .. }) => "interrupted",

@@ -23,11 +23,23 @@ from .errors import (
     ThermostampError,
 )
 from .forming import RunWarning, run
+from .material import (
+    FitResult,
+    TestResult,
+    bias_extension_test,
+    fit_fabric_tension,
+    fit_matrix,
+    fit_shear,
+    material_point,
+    picture_frame_test,
+    uniaxial_test,
+)
 from .result import Check, Frame, Result
 from .scenario import Scenario
 
 __all__ = [
     "Check",
+    "FitResult",
     "Frame",
     "HISTORY_COLUMNS",
     "InputError",
@@ -38,8 +50,16 @@ __all__ = [
     "Scenario",
     "ScenarioError",
     "StudyError",
+    "TestResult",
     "ThermostampError",
     "__version__",
+    "bias_extension_test",
     "errors",
+    "fit_fabric_tension",
+    "fit_matrix",
+    "fit_shear",
+    "material_point",
+    "picture_frame_test",
     "run",
+    "uniaxial_test",
 ]

@@ -1,27 +1,24 @@
 //! `thermostamp fit ...`: parameter identification from test curves (docs/model.md §5):
 //! `fit matrix` and `fit shear` here, `fit fabric-tension` in `fit_fabric_tension.rs`.
 
-use crate::fit::card_key::{remove_key, replace_key, toml_array, toml_float, FIT_MARKER};
-use crate::fit::card_section::{matrix_section, replace_matrix_section};
-use crate::fit::least_squares::{Determination, MAX_POWER};
-use crate::fit::matrix::{fit_matrix, uniaxial_stress, BulkRule, Eta1, TemperatureFit};
-use crate::fit::shear::{
-    fit_shear, read_force_curve, shear_points, ForceCurve, ShearFit, ShearPoint, ShearTest,
+use crate::experiment::virtual_test::cli_names;
+use crate::fit::commands::{
+    fit_matrix_card, fit_shear_card, CurveSource, MatrixCurves, MatrixShare, ShearCardFit,
+    ShearOptions,
 };
+use crate::fit::least_squares::MAX_POWER;
+use crate::fit::matrix::{Eta1, TemperatureFit};
+use crate::fit::shear::ShearFit;
 use crate::fit::shear_fe::{refine_shear_fe, FeRun, RefineSettings, ShearFeFit, Stop};
-use crate::fit::shear_matrix::{matrix_layers, subtract_matrix, TestConditions};
-use crate::fit::tension_data::{read_manifest, TensionCurve};
-use crate::io::plot::{write_png, LinePlot, LineStyle, Series};
+use crate::io::plot::write_png;
 use crate::limits::{
-    check_given, ranges_help, shown, BULK_MODULUS, FRICTION_ONSET, LENGTH, SHEAR_ANGLE, SPEED,
-    TEMPERATURE,
+    ranges_help, BULK_MODULUS, FRICTION_ONSET, LENGTH, SHEAR_ANGLE, SPEED, TEMPERATURE,
 };
-use crate::material::fabric::{ShearInteraction, ShearTerm};
+use crate::material::fabric::ShearTerm;
 use crate::material::fabric_shear::DEFAULT_FRICTION_ONSET_DEG;
-use crate::material::{MaterialCard, TemperatureTable};
 use anyhow::Context;
 use clap::Subcommand;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 #[derive(Subcommand, Debug)]
 pub enum FitCommand {
@@ -179,254 +176,61 @@ pub fn run(command: &FitCommand) -> anyhow::Result<()> {
     }
 }
 
-fn run_shear(args: &ShearArgs) -> anyhow::Result<()> {
-    check_shear_numbers(args)?;
-    let terms = shear_terms(args)?;
-    let test = shear_test(args)?;
-    if args.refine_fe && args.test == ShearTestKind::PictureFrame {
-        anyhow::bail!(
-            "--refine-fe runs the FE bias-extension test: it needs a bias-extension curve; a \
-             picture frame shears homogeneously, so its analytic fit is already what the FE gives"
-        );
+impl ShearArgs {
+    /// The options as the library takes them.
+    fn options(&self) -> ShearOptions {
+        ShearOptions {
+            bias_extension: self.test == ShearTestKind::BiasExtension,
+            width: self.width,
+            length: self.length,
+            frame_side: self.frame_side,
+            fabric_side: self.fabric_side,
+            temperature: self.temperature,
+            speed: self.speed,
+            terms: self.terms.clone(),
+            friction_onset: self.friction_onset,
+            locking_angle: self.locking_angle,
+            max_shear: self.max_shear,
+            refine_fe: self.refine_fe,
+            fe_element_size: self.fe_element_size,
+        }
     }
-    let (text, card) = read_card(&args.card)?;
-    let thickness = fabric_thickness(&card, &args.card)?;
-    let measured = read_force_curve(&args.data)?;
-    let matrix = matrix_share(args, &card, &measured, &test)?;
-    let curve = matrix.as_ref().map_or(&measured, |m| &m.fabric);
-    let fit = fit_shear(curve, &test, thickness, &terms, args.max_shear.to_radians())?;
-    let names: Vec<String> = terms.iter().map(ShearTerm::name).collect();
-    let coefficients = Coefficients {
-        names: &names,
-        values: &fit.result.parameters,
-        errors: &fit.result.standard_errors,
-        unit: "MPa",
-    };
-    check_determined(
-        &args.data.display().to_string(),
-        &format!("--terms {}", args.terms),
-        &coefficients,
-        &fit.result.determination(),
-    )?;
+}
+
+fn run_shear(args: &ShearArgs) -> anyhow::Result<()> {
+    let data = CurveSource::File(args.data.clone());
+    let fitted = fit_shear_card(&args.card, &data, &args.options(), cli_names, &mut |line| {
+        eprintln!("{line}")
+    })?;
+    let fit = &fitted.fit;
     // the analytic fit before the FE loop starts (it takes minutes); without one, the card
     // is written first, so that a reader closing the output early does not lose it
     let refined = if args.refine_fe {
-        print_shear_table(&fit, matrix.as_ref());
-        Some(refine(args, &card, &measured, &fit)?)
+        print_shear_table(fit, fitted.matrix.as_ref());
+        Some(refine(args, &fitted)?)
     } else {
         None
     };
-    let (law, mut provenance) = match &refined {
+    let (law, provenance) = match &refined {
         Some(r) => (r.law(), refined_provenance(args, r)),
         None => (fit.law(), Vec::new()),
     };
-    provenance.splice(0..0, shear_provenance(args, &fit, matrix.as_ref()));
     let origin = args.output.display().to_string();
-    let written = write_shear_law(&text, &law, &provenance)
-        .map_err(|e| anyhow::anyhow!("{}: {e}", args.card.display()))?;
-    fitted_card_loads(&written, &args.output, &args.data.display().to_string())?;
+    let written = fitted.card_with(&law, provenance, &origin)?;
     std::fs::write(&args.output, &written).with_context(|| format!("cannot write {origin}"))?;
     if !args.refine_fe {
-        print_shear_table(&fit, matrix.as_ref());
+        print_shear_table(fit, fitted.matrix.as_ref());
     }
     if let Some(png) = &args.plot {
-        let plot = match &refined {
-            Some(r) => refined_plot(r),
-            None => {
-                let matrix_points = match &matrix {
-                    Some(m) => matrix_points(&measured, m, &test, args.max_shear.to_radians())?,
-                    None => Vec::new(),
-                };
-                shear_plot(&fit, &matrix_points, thickness, args.max_shear)
-            }
-        };
-        write_png(png, &plot, 900, 600)?;
+        write_png(png, &fitted.plot(refined.as_ref())?, 900, 600)?;
     }
     Ok(())
-}
-
-/// The numbers of `fit shear`'s options inside their ranges (`crate::limits`), before any
-/// file is read.
-fn check_shear_numbers(args: &ShearArgs) -> anyhow::Result<()> {
-    check_given([
-        ("--width", args.width, LENGTH),
-        ("--length", args.length, LENGTH),
-        ("--frame-side", args.frame_side, LENGTH),
-        ("--fabric-side", args.fabric_side, LENGTH),
-        ("--temperature", args.temperature, TEMPERATURE),
-        ("--speed", args.speed, SPEED),
-        ("--max-shear", Some(args.max_shear), SHEAR_ANGLE),
-        ("--fe-element-size", args.fe_element_size, LENGTH),
-    ])
-    .map_err(anyhow::Error::msg)
-}
-
-/// The terms `--terms` names (module doc of `fit::shear`), with `--friction-onset` and
-/// `--locking-angle`: each once, powers from 1 to [`MAX_POWER`] (checked before any term is
-/// made: `--terms 4294967295` would be 4294967295 of them), `locking` only with its angle.
-fn shear_terms(args: &ShearArgs) -> anyhow::Result<Vec<ShearTerm>> {
-    let bad = |why: String| anyhow::anyhow!("--terms {}: {why}", args.terms);
-    let beyond = |k: &str| {
-        bad(format!(
-            "power {k} is beyond {MAX_POWER}, the highest a fit determines (a higher power of \
-             I10 is flat over all but the last points of a curve)"
-        ))
-    };
-    // a power: digits only, however many (too many for any integer type is still a power)
-    let power = |token: &str| match token.parse::<u32>() {
-        Ok(k) if k <= MAX_POWER => Ok(Some(k)),
-        _ if !token.is_empty() && token.bytes().all(|b| b.is_ascii_digit()) => Err(beyond(token)),
-        _ => Ok(None),
-    };
-    let tokens: Vec<&str> = args.terms.split(',').map(str::trim).collect();
-    if let [single] = tokens.as_slice() {
-        match power(single)? {
-            Some(0) => return Err(bad("at least one term is needed".into())),
-            Some(m) => return Ok(crate::fit::shear::polynomial_terms(m)),
-            None => {}
-        }
-    }
-    let mut terms = Vec::new();
-    for token in tokens {
-        let term = match token {
-            "friction" => {
-                let onset = args.friction_onset;
-                FRICTION_ONSET
-                    .check("--friction-onset", onset)
-                    .map_err(anyhow::Error::msg)?;
-                ShearTerm::Friction {
-                    onset: onset.to_radians(),
-                }
-            }
-            "locking" => match args.locking_angle {
-                Some(a) => {
-                    SHEAR_ANGLE
-                        .check("--locking-angle", a)
-                        .map_err(anyhow::Error::msg)?;
-                    ShearTerm::Locking {
-                        angle: a.to_radians(),
-                    }
-                }
-                None => anyhow::bail!(
-                    "--terms {}: the locking term needs --locking-angle (degrees), where the \
-                     yarns begin to jam",
-                    args.terms
-                ),
-            },
-            other => match power(other)? {
-                Some(k) if k >= 1 => ShearTerm::Power(k),
-                _ => {
-                    return Err(bad(format!(
-                        "'{other}' is not a term: friction, locking or a power 1, 2, ..."
-                    )))
-                }
-            },
-        };
-        if terms.iter().any(|t: &ShearTerm| t.name() == term.name()) {
-            return Err(bad(format!("'{token}' is named twice")));
-        }
-        terms.push(term);
-    }
-    Ok(terms)
-}
-
-/// A fit's coefficients as its table prints them: names, values, standard errors, unit.
-pub(super) struct Coefficients<'a> {
-    pub names: &'a [String],
-    pub values: &'a [f64],
-    pub errors: &'a [f64],
-    pub unit: &'a str,
-}
-
-/// Refuses a fit with a coefficient that the data (`data`) do not determine
-/// ([`Determination::undetermined`]), naming it and `option`, which chose the terms; notes
-/// on standard error the terms the fit does not need.
-pub(super) fn check_determined(
-    data: &str,
-    option: &str,
-    c: &Coefficients,
-    determination: &Determination,
-) -> anyhow::Result<()> {
-    let describe = |i: usize| {
-        format!(
-            "{} = {} ± {} {}",
-            c.names[i],
-            shown(c.values[i]),
-            shown(c.errors[i]),
-            c.unit
-        )
-    };
-    if let Some(i) = determination.undetermined {
-        anyhow::bail!(
-            "{data}: the data do not determine {}: its standard error exceeds it and moves the \
-             fit by more than 5 %; fit fewer or other terms ({option})",
-            describe(i)
-        );
-    }
-    for &i in &determination.not_needed {
-        eprintln!(
-            "note: {data}: {} is not determined by the data (its standard error exceeds it), \
-             but moves the fit by less than 5 %: the fit does not need the term ({option})",
-            describe(i)
-        );
-    }
-    Ok(())
-}
-
-/// The card a fit is about to write must load. The rest of it loaded as the input card, so
-/// when it does not the fitted coefficients are the cause: the message names the data they
-/// were fitted to (`data`), and `output` is not written.
-pub(super) fn fitted_card_loads(text: &str, output: &Path, data: &str) -> anyhow::Result<()> {
-    match MaterialCard::from_toml(text, &output.display().to_string()) {
-        Ok(_) => Ok(()),
-        Err(e) => anyhow::bail!(
-            "{data}: the coefficients fitted to it make a card that does not load, so {} is not \
-             written: {}; fit fewer or other terms, or over another range",
-            output.display(),
-            e.message
-        ),
-    }
-}
-
-/// `card` with its `[fabric]` shear law set to `law`: `shear` (the polynomial, with
-/// `provenance` above it), `shear_friction` and `shear_friction_onset`, `shear_locking` and
-/// `shear_locking_angle`, each written when the law has the term and removed when not.
-fn write_shear_law(
-    card: &str,
-    law: &ShearInteraction,
-    provenance: &[String],
-) -> Result<String, String> {
-    let mut text = replace_key(
-        card,
-        "fabric",
-        "shear",
-        &toml_array(&law.coefficients()),
-        provenance,
-    )?;
-    let mut set = |key: &str, value: Option<f64>| -> Result<(), String> {
-        text = match value {
-            Some(v) => replace_key(&text, "fabric", key, &toml_float(v), &[])?,
-            None => remove_key(&text, "fabric", key)?,
-        };
-        Ok(())
-    };
-    let friction = law.friction();
-    set("shear_friction", friction.map(|f| f.0))?;
-    set("shear_friction_onset", friction.map(|f| f.1.to_degrees()))?;
-    let locking = law.locking();
-    set("shear_locking", locking.map(|l| l.0))?;
-    set("shear_locking_angle", locking.map(|l| l.1.to_degrees()))?;
-    Ok(text)
 }
 
 /// `--refine-fe`: the FE bias-extension test in the loop, from the analytic fit, on the
 /// measured (not matrix-subtracted: the FE has the matrix layers) curve.
-fn refine(
-    args: &ShearArgs,
-    card: &MaterialCard,
-    measured: &ForceCurve,
-    fit: &ShearFit,
-) -> anyhow::Result<ShearFeFit> {
+fn refine(args: &ShearArgs, fitted: &ShearCardFit) -> anyhow::Result<ShearFeFit> {
+    let fit = &fitted.fit;
     let (Some(width), Some(length)) = (args.width, args.length) else {
         anyhow::bail!("--refine-fe needs the bias-extension specimen's --width and --length");
     };
@@ -470,7 +274,13 @@ fn refine(
             r.wall_seconds
         );
     };
-    let refined = refine_shear_fe(measured, card, &fit.law(), &settings, &mut report)?;
+    let refined = refine_shear_fe(
+        &fitted.measured,
+        &fitted.card,
+        &fit.law(),
+        &settings,
+        &mut report,
+    )?;
     if refined.stop == Stop::NoDescent {
         eprintln!(
             "warning: no step along the analytic model's direction lowered the FE misfit; the \
@@ -509,167 +319,6 @@ fn refined_provenance(args: &ShearArgs, refined: &ShearFeFit) -> Vec<String> {
         refined.runs.len(),
         errors.join(", ")
     )]
-}
-
-/// Crosshead force against displacement: the data and the final FE run.
-fn refined_plot(refined: &ShearFeFit) -> LinePlot {
-    let data = refined
-        .points
-        .iter()
-        .map(|p| (p.displacement, p.data))
-        .collect();
-    let fe = refined
-        .points
-        .iter()
-        .map(|p| (p.displacement, p.fe))
-        .collect();
-    LinePlot {
-        title: "fit shear --refine-fe: data (dots), FE bias-extension test (line)".into(),
-        x_label: "crosshead displacement (mm)".into(),
-        y_label: "force (N)".into(),
-        series: vec![
-            Series::new("data", data, LineStyle::Markers).with_colour(0),
-            Series::new("FE, refined card", fe, LineStyle::Solid).with_colour(1),
-        ],
-    }
-}
-
-/// The fabric's part of a prepreg's curve and the matrix layers' part (docs/model.md §5).
-struct MatrixShare {
-    fabric: ForceCurve,
-    force: Vec<f64>,
-    conditions: TestConditions,
-}
-
-/// The matrix layers' share of the measured force, for a card that has matrix layers; `None`
-/// for a dry fabric.
-fn matrix_share(
-    args: &ShearArgs,
-    card: &MaterialCard,
-    measured: &ForceCurve,
-    test: &ShearTest,
-) -> anyhow::Result<Option<MatrixShare>> {
-    let Some(layers) = matrix_layers(&card.laminate) else {
-        return Ok(None);
-    };
-    let (Some(temperature), Some(speed)) = (args.temperature, args.speed) else {
-        anyhow::bail!(
-            "{}: the card has matrix layers; their share of the force is subtracted at the \
-             test's temperature and crosshead speed: give --temperature (°C) and --speed (mm/s)",
-            args.card.display()
-        );
-    };
-    let conditions = TestConditions { temperature, speed };
-    let (fabric, force) = subtract_matrix(measured, &layers, test, conditions).map_err(|e| {
-        anyhow::anyhow!(
-            "{}: the matrix layers at {temperature} °C: {e}",
-            args.card.display()
-        )
-    })?;
-    Ok(Some(MatrixShare {
-        fabric,
-        force,
-        conditions,
-    }))
-}
-
-/// The matrix layers' force normalised like the data, up to `max_shear` (for the plot).
-fn matrix_points(
-    measured: &ForceCurve,
-    matrix: &MatrixShare,
-    test: &ShearTest,
-    max_shear: f64,
-) -> anyhow::Result<Vec<ShearPoint>> {
-    let curve = ForceCurve {
-        force: matrix.force.clone(),
-        ..measured.clone()
-    };
-    Ok(shear_points(&curve, test)?
-        .into_iter()
-        .filter(|p| p.gamma <= max_shear)
-        .collect())
-}
-
-fn shear_test(args: &ShearArgs) -> anyhow::Result<ShearTest> {
-    let test = match args.test {
-        ShearTestKind::BiasExtension => match (args.width, args.length) {
-            (Some(width), Some(length)) => ShearTest::BiasExtension { width, length },
-            _ => anyhow::bail!("a bias-extension curve needs --width and --length (mm)"),
-        },
-        ShearTestKind::PictureFrame => match args.frame_side {
-            Some(frame_side) => ShearTest::PictureFrame {
-                frame_side,
-                fabric_side: args.fabric_side.unwrap_or(frame_side),
-            },
-            None => anyhow::bail!("a picture-frame curve needs --frame-side (mm)"),
-        },
-    };
-    test.validate().map_err(anyhow::Error::msg)?;
-    Ok(test)
-}
-
-/// The fabric layer's thickness t_B: the card's stack must have exactly one fabric layer.
-fn fabric_thickness(card: &MaterialCard, path: &Path) -> anyhow::Result<f64> {
-    let fabric: Vec<f64> = card
-        .laminate
-        .layers()
-        .iter()
-        .filter(|l| l.law.name() == "fabric")
-        .map(|l| l.thickness)
-        .collect();
-    match fabric[..] {
-        [thickness] => Ok(thickness),
-        _ => anyhow::bail!(
-            "{}: the stack has {} fabric layers; the shear fit needs exactly one",
-            path.display(),
-            fabric.len()
-        ),
-    }
-}
-
-/// Comment lines above the written `shear` key: what it was fitted from and how; the first
-/// starts with [`FIT_MARKER`] so that a re-fit replaces them.
-fn shear_provenance(args: &ShearArgs, fit: &ShearFit, matrix: Option<&MatrixShare>) -> Vec<String> {
-    let test = match args.test {
-        ShearTestKind::BiasExtension => format!(
-            "bias extension {} x {} mm",
-            args.width.unwrap_or(f64::NAN),
-            args.length.unwrap_or(f64::NAN)
-        ),
-        ShearTestKind::PictureFrame => format!(
-            "picture frame, frame side {} mm",
-            args.frame_side.unwrap_or(f64::NAN)
-        ),
-    };
-    let errors: Vec<String> = fit
-        .result
-        .standard_errors
-        .iter()
-        .map(|e| format!("{e:.2e}"))
-        .collect();
-    let mut lines = vec![format!(
-        "{FIT_MARKER} shear` (docs/model.md §5) to {} ({test}), {} points up to {}° of shear.",
-        args.data.display(),
-        fit.points.len(),
-        args.max_shear
-    )];
-    if let Some(m) = matrix {
-        lines.push(format!(
-            "The matrix layers' force at {} °C and {} mm/s was subtracted first.",
-            m.conditions.temperature, m.conditions.speed
-        ));
-    }
-    lines.push(format!(
-        "Standard errors [{}] MPa (terms {}); RMS misfit of the {} {:.3e} ({:.1} % of the \
-         mean, {:.1} % of the range).",
-        errors.join(", "),
-        args.terms,
-        fit.quantity,
-        fit.rms,
-        100.0 * fit.rms_of_mean,
-        100.0 * fit.rms_of_range
-    ));
-    lines
 }
 
 /// The names of the terms' coefficients, for a table header (MPa).
@@ -743,113 +392,21 @@ fn print_shear_table(fit: &ShearFit, matrix: Option<&MatrixShare>) {
     }
 }
 
-/// Normalised shear force vs shear angle: data as dots, the fitted law as a line, and the
-/// subtracted matrix layers' share (if any) dashed.
-fn shear_plot(
-    fit: &ShearFit,
-    matrix: &[ShearPoint],
-    thickness: f64,
-    max_shear_deg: f64,
-) -> LinePlot {
-    let data = fit
-        .points
-        .iter()
-        .map(|p| (p.gamma.to_degrees(), p.force))
-        .collect();
-    let law = fit.law();
-    let model = (0..=100)
-        .map(|k| {
-            let g = max_shear_deg * f64::from(k) / 100.0;
-            (g, law.normalised_shear_force(thickness, g.to_radians()))
-        })
-        .collect();
-    let label = if matrix.is_empty() {
-        "data"
-    } else {
-        "data less the matrix layers"
-    };
-    let mut series = vec![
-        Series::new(label, data, LineStyle::Markers).with_colour(0),
-        Series::new("model", model, LineStyle::Solid).with_colour(1),
-    ];
-    if !matrix.is_empty() {
-        let share = matrix
-            .iter()
-            .map(|p| (p.gamma.to_degrees(), p.force))
-            .collect();
-        series.push(
-            Series::new("matrix layers (subtracted)", share, LineStyle::Dashed).with_colour(2),
-        );
-    }
-    LinePlot {
-        title: "fit shear: data (dots), F_sh = 2 t sin(g) W_s'(sin^2 g) (line)".into(),
-        x_label: "shear angle (°)".into(),
-        y_label: "normalised shear force (N/mm)".into(),
-        series,
-    }
-}
-
 fn run_matrix(args: &MatrixArgs) -> anyhow::Result<()> {
-    let card = args.card.as_ref().map(|path| read_card(path)).transpose()?;
-    let matrix = card.as_ref().and_then(|(_, c)| c.matrix.clone());
-    let bulk = bulk_rule(args, matrix.as_deref().map(|m| m.d1_table()))?;
-    let curves = read_manifest(&args.manifest)?;
-    let fits = fit_matrix(&curves, &bulk, matrix.as_deref().map(|m| m.eta1_table()))?;
-
-    let section = matrix_section(&fits, &provenance(args, &curves, &bulk));
-    let text = match &card {
-        Some((text, _)) => replace_matrix_section(text, &section),
-        None => section,
-    };
     let origin = args.output.display().to_string();
-    if card.is_some() {
-        fitted_card_loads(&text, &args.output, &args.manifest.display().to_string())?;
-    }
-    std::fs::write(&args.output, &text).with_context(|| format!("cannot write {origin}"))?;
-    print_table(&fits);
+    let fitted = fit_matrix_card(
+        args.card.as_deref(),
+        &MatrixCurves::Manifest(args.manifest.clone()),
+        (args.bulk_modulus, args.poisson),
+        &origin,
+        cli_names,
+    )?;
+    std::fs::write(&args.output, &fitted.card).with_context(|| format!("cannot write {origin}"))?;
+    print_table(&fitted.fits);
     if let Some(png) = &args.plot {
-        write_png(png, &comparison_plot(&curves, &fits), 900, 600)?;
+        write_png(png, &fitted.plot(), 900, 600)?;
     }
     Ok(())
-}
-
-fn read_card(path: &Path) -> anyhow::Result<(String, MaterialCard)> {
-    let text = std::fs::read_to_string(path)
-        .with_context(|| format!("{}: cannot read the material card", path.display()))?;
-    let card = MaterialCard::from_toml(&text, &path.display().to_string())?;
-    Ok((text, card))
-}
-
-fn bulk_rule(args: &MatrixArgs, card_d1: Option<&TemperatureTable>) -> anyhow::Result<BulkRule> {
-    let rule = match (args.bulk_modulus, args.poisson, card_d1) {
-        (Some(k), _, _) => BulkRule::BulkModulus(k),
-        (None, Some(nu), _) => BulkRule::Poisson(nu),
-        (None, None, Some(table)) => BulkRule::Table(table.clone()),
-        (None, None, None) => anyhow::bail!(
-            "D1 needs --bulk-modulus K or --poisson nu (or a --card whose [matrix] d1 is kept)"
-        ),
-    };
-    rule.validate().map_err(anyhow::Error::msg)?;
-    Ok(rule)
-}
-
-/// Comment lines of the written section: what it was fitted from and how.
-fn provenance(args: &MatrixArgs, curves: &[TensionCurve], bulk: &BulkRule) -> Vec<String> {
-    let d1 = match bulk {
-        BulkRule::BulkModulus(k) => format!("D1 = 2/K with K = {k} MPa"),
-        BulkRule::Poisson(nu) => {
-            format!("D1 = 2/K with K = 2G(1+nu)/(3(1-2nu)), G = 2 C10(T), nu = {nu}")
-        }
-        BulkRule::Table(_) => "D1 interpolated in the input card's table".into(),
-    };
-    vec![
-        format!(
-            "Fitted by `thermostamp fit matrix` (docs/model.md §5) to {} curves of {}.",
-            curves.len(),
-            args.manifest.display()
-        ),
-        format!("{d1}."),
-    ]
 }
 
 fn print_table(fits: &[TemperatureFit]) {
@@ -875,39 +432,5 @@ fn print_table(fits: &[TemperatureFit]) {
             f.d1,
             f.rms_residual
         );
-    }
-}
-
-/// Data as dots and the fitted model as lines, one colour per curve.
-fn comparison_plot(curves: &[TensionCurve], fits: &[TemperatureFit]) -> LinePlot {
-    let mut series = Vec::new();
-    let mut colour = 0;
-    for fit in fits {
-        for &i in &fit.curves {
-            let curve = &curves[i];
-            let data = curve
-                .stretch
-                .iter()
-                .copied()
-                .zip(curve.stress.iter().copied());
-            series.push(Series::new("", data.collect(), LineStyle::Markers).with_colour(colour));
-            let (first, last) = (curve.stretch[0], curve.stretch[curve.stretch.len() - 1]);
-            let model = (0..=100)
-                .map(|k| {
-                    let l = first + (last - first) * f64::from(k) / 100.0;
-                    let sigma = uniaxial_stress(fit.c10, fit.eta1.value(), l, curve.strain_rate);
-                    (l, sigma)
-                })
-                .collect();
-            let label = format!("{} °C, {} /s", fit.temperature, curve.strain_rate);
-            series.push(Series::new(label, model, LineStyle::Solid).with_colour(colour));
-            colour += 1;
-        }
-    }
-    LinePlot {
-        title: "fit matrix: data (dots), model of docs/model.md §5 (lines)".into(),
-        x_label: "stretch".into(),
-        y_label: "true stress (MPa)".into(),
-        series,
     }
 }

@@ -2,29 +2,22 @@
 //! progress bar and a summary table.
 
 use super::shared::{
-    implicit_summary, print_checked_table, status_row, take_output_folder, with_threads, Bar,
-    Interrupt, Watch,
+    implicit_summary, print_checked_table, status_row, with_threads, Bar, Interrupt,
 };
-use crate::experiment::bias_extension::{BiasExtension, BiasRow};
-use crate::experiment::picture_frame::{PictureFrame, PictureFrameRow};
-use crate::experiment::sheet_test::{
-    quasi_static_time_scaling, FrameOutput, HistorySink, LiveOutput, Progress, Record, RunSummary,
-    SheetTest, TestProcess, TestRun, QUASI_STATIC_SPEED_RATIO,
-};
-use crate::experiment::uniaxial::{UniaxialRow, UniaxialTension};
-use crate::io::output_folder::ProductFiles;
-use crate::io::plot::{write_png, LinePlot, LineStyle, Series};
-use crate::io::vtk::PvdSeries;
-use crate::io::CsvStream;
+use crate::experiment::bias_extension::BiasExtension;
+use crate::experiment::picture_frame::PictureFrame;
+use crate::experiment::sheet_test::{Progress, RunSummary, TestProcess, TestRun};
+use crate::experiment::uniaxial::UniaxialTension;
+use crate::experiment::virtual_test::{cli_names, prepare, Specimen, TestOptions, DRY_TEMPERATURE};
 use crate::limits::{
-    check_given, ranges_help, Range, ANGLE, DAMPING, FRAMES, HISTORY_POINTS, LENGTH, SPEED,
-    TEMPERATURE, TIME_SCALING, TIME_STEP,
+    ranges_help, Range, ANGLE, DAMPING, FRAMES, HISTORY_POINTS, LENGTH, SPEED, TEMPERATURE,
+    TIME_SCALING, TIME_STEP,
 };
-use crate::material::MaterialCard;
 use crate::mesh::DiagonalPattern;
-use crate::solver::estimate::{self, RunEstimate};
+use crate::solver::estimate::RunEstimate;
 use crate::solver::SolverKind;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 #[derive(clap::Subcommand, Debug)]
 pub enum TestCommand {
@@ -101,56 +94,20 @@ pub struct CommonArgs {
 }
 
 impl CommonArgs {
-    /// The numbers given on the command line, each inside its range (`crate::limits`) and
-    /// named by its option, before the test's own checks (which name them as the library does).
-    fn check_numbers(&self) -> anyhow::Result<()> {
-        // 0 turns mass scaling off; any other step is one
-        let target_step = self.target_step.filter(|&dt| dt != 0.0);
-        check_given([
-            ("--temperature", self.temperature, TEMPERATURE),
-            ("--speed", self.speed, SPEED),
-            ("--time-scaling", self.time_scaling, TIME_SCALING),
-            ("--target-step", target_step, TIME_STEP),
-            ("--damping", Some(self.damping), DAMPING),
-            ("--element-size", self.element_size, LENGTH),
-            ("--end-displacement", self.end_displacement, LENGTH),
-            ("--frames", Some(self.frames as f64), FRAMES),
-            (
-                "--history-points",
-                Some(self.history_points as f64),
-                HISTORY_POINTS,
-            ),
-        ])
-        .map_err(anyhow::Error::msg)
-    }
-
-    /// Overrides a test's default process with the options given.
-    fn apply(&self, p: &mut TestProcess) {
-        p.solver = self.solver;
-        if self.solver == SolverKind::Implicit {
-            // the implicit run has no inertia: the test's scalings are left out unless given
-            // (and then refused by the test's checks, naming them)
-            p.time_scaling = 1.0;
-            p.target_time_step = None;
-        }
-        p.pattern = self.pattern;
-        p.damping = self.damping;
-        p.history_points = self.history_points.max(2);
-        if let Some(v) = self.speed {
-            p.speed = v;
-        }
-        if let Some(s) = self.time_scaling {
-            p.time_scaling = s;
-        }
-        if let Some(h) = self.element_size {
-            p.element_size = h;
-        }
-        if let Some(d) = self.end_displacement {
-            p.end_displacement = d;
-        }
-        if let Some(dt) = self.target_step {
-            // 0 turns mass scaling off; a negative step is left for the validation to refuse
-            p.target_time_step = (dt != 0.0).then_some(dt);
+    /// The options as the library takes them.
+    fn options(&self) -> TestOptions {
+        TestOptions {
+            temperature: self.temperature,
+            speed: self.speed,
+            time_scaling: self.time_scaling,
+            target_step: self.target_step,
+            damping: self.damping,
+            element_size: self.element_size,
+            pattern: self.pattern,
+            end_displacement: self.end_displacement,
+            frames: self.frames,
+            history_points: self.history_points,
+            solver: self.solver,
         }
     }
 }
@@ -194,19 +151,26 @@ pub struct PictureFrameArgs {
 pub fn run(command: &TestCommand) -> anyhow::Result<()> {
     let interrupt = Interrupt::install()?;
     let i = &interrupt;
-    match command {
-        TestCommand::BiasExtension(args) => {
-            with_threads(args.common.threads, || bias_extension(args, i))
-        }
-        TestCommand::Uniaxial(args) => with_threads(args.common.threads, || uniaxial(args, i)),
-        TestCommand::PictureFrame(args) => {
-            with_threads(args.common.threads, || picture_frame(args, i))
-        }
-    }
+    let (common, specimen) = match command {
+        TestCommand::BiasExtension(a) => (
+            &a.common,
+            Specimen::BiasExtension {
+                width: a.width,
+                length: a.length,
+            },
+        ),
+        TestCommand::Uniaxial(a) => (
+            &a.common,
+            Specimen::Uniaxial {
+                width: a.width,
+                length: a.length,
+                ply_angle: a.ply_angle,
+            },
+        ),
+        TestCommand::PictureFrame(a) => (&a.common, Specimen::PictureFrame { side: a.side }),
+    };
+    with_threads(common.threads, || sheet_test(common, specimen, i))
 }
-
-/// The test temperature of a dry fabric when none is given (°C): room temperature.
-const DRY_TEMPERATURE: f64 = 20.0;
 
 /// The defaults of a test's process for its `--help`, read from the test itself so that the
 /// help says what the test does; then the ranges of the options, the test's `own` among them.
@@ -245,486 +209,49 @@ fn process_defaults(p: &TestProcess, own: &[(&str, Range)]) -> String {
     )
 }
 
-/// The card, and the test temperature: given, or for a dry fabric [`DRY_TEMPERATURE`].
-fn card_and_temperature(common: &CommonArgs) -> anyhow::Result<(MaterialCard, f64)> {
-    common.check_numbers()?;
-    let card = MaterialCard::load(&common.card)?;
-    let temperature = match (common.temperature, card.temperature_range()) {
-        (Some(t), _) => t,
-        (None, None) => DRY_TEMPERATURE,
-        (None, Some((lo, hi))) => anyhow::bail!(
-            "--temperature is required: the card's matrix is tabulated from {lo} to {hi} °C"
-        ),
+/// The progress bar of a run and the flag Ctrl-C raises.
+struct Watch<'a> {
+    bar: Bar,
+    stop: &'a AtomicBool,
+}
+
+impl Progress for Watch<'_> {
+    fn update(&mut self, time: f64, step: usize) {
+        self.bar.update(time, step);
+    }
+
+    fn interrupted(&self) -> bool {
+        self.stop.load(Ordering::Relaxed)
+    }
+}
+
+/// Checks, sets up and runs a virtual test (`experiment::virtual_test`) with the shared
+/// outputs: the notes and the estimate on standard error, a progress bar while it runs, then
+/// the summary table. A run that went unstable or was interrupted keeps what it wrote and
+/// returns its solver error.
+fn sheet_test(c: &CommonArgs, specimen: Specimen, interrupt: &Interrupt) -> anyhow::Result<()> {
+    let test = prepare(&c.card, specimen, &c.options(), cli_names, &mut |line| {
+        eprintln!("{line}")
+    })?;
+    let command = super::shared::command_line();
+    let start = |end_time| Watch {
+        bar: Bar::new(end_time),
+        stop: interrupt.running(),
     };
-    card.check_temperature("--temperature", temperature)
-        .map_err(|e| anyhow::anyhow!("{}: {e}", common.card.display()))?;
-    Ok((card, temperature))
-}
-
-/// A specimen dimension given on the command line: a length (`crate::limits::LENGTH`), or an
-/// error naming the option.
-fn dimension(option: &str, value: f64) -> anyhow::Result<f64> {
-    LENGTH.check(option, value).map_err(anyhow::Error::msg)?;
-    Ok(value)
-}
-
-fn bias_extension(args: &BiasArgs, interrupt: &Interrupt) -> anyhow::Result<()> {
-    let c = &args.common;
-    let (card, temperature) = card_and_temperature(c)?;
-    let mut test = BiasExtension::benchmark(temperature);
-    test.width = dimension("--width", args.width)?;
-    test.length = dimension("--length", args.length)?;
-    test.process.element_size = test.default_element_size();
-    c.apply(&mut test.process);
-    let names = ("bias extension", "bias-extension");
-    let specimen = (test.width, test.length);
-    sheet_test(
-        c,
-        &card,
-        (names, specimen),
-        &mut test,
-        bias_report,
-        interrupt,
-    )
-}
-
-fn uniaxial(args: &UniaxialArgs, interrupt: &Interrupt) -> anyhow::Result<()> {
-    let c = &args.common;
-    let (card, temperature) = card_and_temperature(c)?;
-    let mut test = UniaxialTension::standard(temperature);
-    test.width = dimension("--width", args.width)?;
-    test.length = dimension("--length", args.length)?;
-    ANGLE
-        .check("--ply-angle", args.ply_angle)
-        .map_err(anyhow::Error::msg)?;
-    test.ply_angle = args.ply_angle;
-    test.process.element_size = test.default_element_size();
-    c.apply(&mut test.process);
-    let names = ("uniaxial test", "uniaxial");
-    let specimen = (test.width, test.length);
-    sheet_test(
-        c,
-        &card,
-        (names, specimen),
-        &mut test,
-        uniaxial_report,
-        interrupt,
-    )
-}
-
-fn picture_frame(args: &PictureFrameArgs, interrupt: &Interrupt) -> anyhow::Result<()> {
-    let c = &args.common;
-    let (card, temperature) = card_and_temperature(c)?;
-    let mut test = PictureFrame::standard(temperature);
-    test.side = dimension("--side", args.side)?;
-    test.process.element_size = test.default_element_size();
-    c.apply(&mut test.process);
-    let names = ("picture frame", "picture-frame");
-    let specimen = (test.side, test.side);
-    sheet_test(
-        c,
-        &card,
-        (names, specimen),
-        &mut test,
-        picture_frame_report,
-        interrupt,
-    )
-}
-
-/// Validates and runs a [`SheetTest`] with the shared outputs; `names` as for
-/// [`run_and_report`], `specimen` its width and length (mm), `report` turns its rows into
-/// columns and plots.
-fn sheet_test<T: SheetTest>(
-    c: &CommonArgs,
-    card: &MaterialCard,
-    (names, specimen): ((&str, &str), (f64, f64)),
-    test: &mut T,
-    report: fn(&[T::Row]) -> TestReport,
-    interrupt: &Interrupt,
-) -> anyhow::Result<()> {
-    let refuse = |e: String| anyhow::anyhow!("{}: {e}", names.0);
-    test.validate().map_err(refuse)?;
-    check_specimen_memory(test.process(), specimen, card).map_err(refuse)?;
-    let chosen = choose_defaults(c, test, specimen, card).map_err(refuse)?;
-    for line in &chosen {
-        eprintln!("note: {line}");
-    }
-    let test = &*test;
-    let estimate = test
-        .estimate(&card.laminate, card.density)
-        .map_err(refuse)?;
-    match test.process().solver {
-        SolverKind::Explicit => {
-            warn_if_dynamic(test, card).map_err(refuse)?;
-            estimate::check_steps(
-                &estimate,
-                (
-                    "--element-size or --target-step (the step)",
-                    "--speed or --time-scaling",
-                    "--target-step",
-                ),
-            )
-            .map_err(refuse)?;
-            eprintln!("{}", estimate.describe());
-        }
-        SolverKind::Implicit => eprintln!(
-            "implicit quasi-static run of {} elements at the physical crosshead speed",
-            estimate.size.elements
-        ),
-    }
-    let p = test.process();
-    let shape = (test.settings().end_time, p.time_scaling);
-    let history = |mut csv: CsvStream| -> HistorySink<'_, Record> {
-        Box::new(move |records: &[Record]| {
-            if let Some(row) = newest_row(test, report, records, shape.1) {
-                csv.write_row(&row)?;
-            }
-            Ok(())
-        })
-    };
-    let columns = report(&[]).columns;
-    run_and_report(
-        c,
-        (names, &estimate, &chosen),
-        shape,
-        columns,
-        |output, bar| {
-            let output = LiveOutput {
-                history: output.csv.map(history),
-                frames: output.frames,
-            };
-            let result = test.run(&card.laminate, card.density, Some(output), Some(bar))?;
-            Ok((result.run, report(&result.rows)))
-        },
-        interrupt,
-    )
-}
-
-/// The defaults that depend on the specimen and the card, for what the options leave open: the
-/// element size (set relative to the specimen by the test, reported here) and, with neither
-/// --speed nor --time-scaling given, a time scaling low enough for a quasi-static test
-/// ([`quasi_static_time_scaling`]). One line each of what was chosen.
-fn choose_defaults<T: SheetTest>(
-    c: &CommonArgs,
-    test: &mut T,
-    (width, length): (f64, f64),
-    card: &MaterialCard,
-) -> Result<Vec<String>, String> {
-    let mut chosen = Vec::new();
-    if c.element_size.is_none() {
-        let h = test.process().element_size;
-        chosen.push(format!(
-            "element size {h:.4} mm ({:.0} x {:.0} cells on the {width} x {length} mm specimen; \
-             --element-size to change)",
-            width / h,
-            length / h
-        ));
-    }
-    if c.speed.is_none() && c.time_scaling.is_none() && c.solver == SolverKind::Explicit {
-        let ratio = test.speed_to_shear_wave(&card.laminate, card.density)?;
-        let scaling = test.process().time_scaling;
-        if let Some(lower) = quasi_static_time_scaling(ratio, scaling) {
-            test.process_mut().time_scaling = lower;
-            chosen.push(format!(
-                "time scaling {lower:.4} instead of {scaling}: the crosshead at {:.2} % of the \
-                 card's shear wave speed, quasi-static (--time-scaling to change)",
-                100.0 * ratio * lower / scaling
-            ));
-        }
-    }
-    Ok(chosen)
-}
-
-/// Refuses a specimen whose mesh would not fit the memory the machine has free, from the
-/// element size before the mesh is made.
-fn check_specimen_memory(
-    p: &TestProcess,
-    (width, length): (f64, f64),
-    card: &MaterialCard,
-) -> Result<(), String> {
-    let cells = |side: f64| (side / p.element_size).round().max(1.0);
-    let (nx, ny) = (cells(width), cells(length));
-    let (elements, nodes) = p.pattern.counts(nx, ny);
-    let layers = card.laminate.initial_state().thickness_stretch.len();
-    let (per_element, per_node, _) = estimate::item_bytes(layers, false, 0);
-    estimate::check_memory(elements * per_element + nodes * per_node, "--element-size")
-}
-
-/// The CSV row of the newest of `records`: its test's rows are computed from the records so
-/// far (a row depends on the records up to its own only).
-fn newest_row<T: SheetTest>(
-    test: &T,
-    report: fn(&[T::Row]) -> TestReport,
-    records: &[Record],
-    time_scaling: f64,
-) -> Option<Vec<f64>> {
-    let rows = test.rows(records);
-    let own = *report(rows.get(rows.len().checked_sub(1)?..)?)
-        .rows
-        .first()?;
-    Some(history_row(records.last()?, &own, time_scaling))
-}
-
-/// What [`run_and_report`] opens before the run, for the test to write as it goes.
-struct OpenOutput {
-    csv: Option<CsvStream>,
-    frames: Option<FrameOutput>,
-}
-
-/// A warning on standard error when the crosshead is too fast for a quasi-static test.
-fn warn_if_dynamic<T: SheetTest>(test: &T, card: &MaterialCard) -> Result<(), String> {
-    let ratio = test.speed_to_shear_wave(&card.laminate, card.density)?;
-    if ratio > QUASI_STATIC_SPEED_RATIO {
-        eprintln!(
-            "warning: the crosshead moves at {:.1} % of the specimen's shear wave speed (more \
-             than {} %): its inertia will show in the force; lower --speed, --time-scaling or \
-             --target-step",
-            100.0 * ratio,
-            100.0 * QUASI_STATIC_SPEED_RATIO
-        );
-    }
-    Ok(())
-}
-
-/// Runs a virtual test with the shared outputs: the CSV history (`columns` are the test's
-/// own), ParaView frames and a progress bar while it runs, then the plots and the summary
-/// table. `(label, name)`: the test in messages and the stem of its files; `(end_time,
-/// time_scaling)` of the run. `run` returns the test's run and its report; a run that went
-/// unstable or was interrupted keeps what it wrote and returns its solver error.
-fn run_and_report(
-    c: &CommonArgs,
-    ((label, name), estimate, chosen): ((&str, &str), &RunEstimate, &[String]),
-    (end_time, time_scaling): (f64, f64),
-    columns: [&str; 3],
-    run: impl FnOnce(OpenOutput, &mut dyn Progress) -> Result<(TestRun, TestReport), String>,
-    interrupt: &Interrupt,
-) -> anyhow::Result<()> {
-    let _lock = take_output_folder(&c.output, &products(name))?;
-    let csv = c.output.join(format!("{name}.csv"));
-    let header: Vec<&str> = ["time", "displacement", "force"]
-        .into_iter()
-        .chain(columns)
-        .chain(ENERGY_COLUMNS)
-        .chain(["solver_time"])
-        .collect();
-    let output = OpenOutput {
-        csv: Some(CsvStream::create(&csv, &header)?),
-        frames: frame_output(&c.output, name, (c.frames, end_time), time_scaling)?,
-    };
-    let wrote_frames = output.frames.is_some();
-    let stop = interrupt.running();
-    let mut bar = Bar::new(end_time);
-    let mut watch = Watch {
-        bar: &mut bar,
-        stop,
-    };
-    let (run, report) = run(output, &mut watch).map_err(|e| anyhow::anyhow!("{label}: {e}"))?;
-    bar.finish();
+    let (outcome, watch) = test.run(Some((&c.output, &command)), start)?;
+    watch.bar.finish();
+    let run = outcome.run;
     if run.records.is_empty() {
         // stopped before its first record: nothing to write
         return run.outcome.map(|_| ()).map_err(anyhow::Error::from);
     }
-    let mut files = vec![csv];
-    files.extend(write_plots(&c.output, name, &report, &run.records)?);
-    if wrote_frames {
-        files.push(c.output.join(format!("{name}.pvd")));
-    }
-    print_summary(&run, (time_scaling, chosen), estimate, &files);
+    print_summary(
+        &run,
+        (test.time_scaling, &test.chosen),
+        &test.estimate,
+        &outcome.files,
+    );
     run.outcome.map(|_| ()).map_err(anyhow::Error::from)
-}
-
-/// The files a test named `name` writes, by which a later run into the folder finds and
-/// clears them.
-fn products(name: &str) -> ProductFiles {
-    let csv = format!("{name}.csv");
-    let plots = PLOT_SUFFIXES.map(|suffix| format!("{name}-{suffix}.png"));
-    ProductFiles {
-        names: std::iter::once(csv).chain(plots).collect(),
-        series: Some(name.into()),
-    }
-}
-
-/// The plots of the tests: `<name>-<suffix>.png`.
-const PLOT_SUFFIXES: [&str; 2] = ["force", "shear-angle"];
-
-/// `frames` frames over a run of `end_time` simulated seconds, at process times (the run's
-/// times times `time_scaling`).
-fn frame_output(
-    dir: &Path,
-    name: &str,
-    (frames, end_time): (usize, f64),
-    time_scaling: f64,
-) -> anyhow::Result<Option<FrameOutput>> {
-    if frames == 0 {
-        return Ok(None);
-    }
-    Ok(Some(FrameOutput::new(
-        PvdSeries::new(dir, name)?,
-        (frames, end_time),
-        time_scaling,
-    )))
-}
-
-/// What a finished test hands to the writer besides its records (which give the time,
-/// displacement, force and energy columns and the force plot): its name in titles, its own
-/// columns with one row of them per record, and its other plots, each `(file suffix, plot)`.
-struct TestReport {
-    title: &'static str,
-    columns: [&'static str; 3],
-    rows: Vec<[f64; 3]>,
-    plots: Vec<(&'static str, LinePlot)>,
-}
-
-/// Energy columns every history ends with.
-const ENERGY_COLUMNS: [&str; 7] = [
-    "kinetic",
-    "internal_work",
-    "elastic",
-    "viscous_dissipation",
-    "damping",
-    "external_work",
-    "energy_balance_error",
-];
-
-/// One CSV row: time, displacement and force of the record, the test's own cells, the
-/// energies and the solver's time. `time` is process time, the solver's times `time_scaling`,
-/// as the frames' times are.
-fn history_row(record: &Record, own: &[f64; 3], time_scaling: f64) -> Vec<f64> {
-    let e = &record.energies;
-    let r = &record.reading;
-    let energies = [
-        e.kinetic,
-        e.internal_work,
-        e.elastic,
-        e.viscous_dissipation(),
-        e.damping,
-        e.external_work,
-        e.balance_error(),
-    ];
-    [record.time * time_scaling, r.displacement, r.force]
-        .into_iter()
-        .chain(own.iter().copied())
-        .chain(energies)
-        .chain([record.time])
-        .collect()
-}
-
-/// `<name>-force.png` and `<name>-<suffix>.png` per further plot; returns the files written.
-fn write_plots(
-    dir: &Path,
-    name: &str,
-    report: &TestReport,
-    records: &[Record],
-) -> anyhow::Result<Vec<PathBuf>> {
-    let mut files = Vec::new();
-    let force = (PLOT_SUFFIXES[0], force_plot(report.title, records));
-    for (suffix, plot) in std::iter::once(&force).chain(&report.plots) {
-        let png = dir.join(format!("{name}-{suffix}.png"));
-        write_png(&png, plot, 900, 600)?;
-        files.push(png);
-    }
-    Ok(files)
-}
-
-/// The crosshead force against the displacement.
-fn force_plot(test: &str, records: &[Record]) -> LinePlot {
-    let points = records
-        .iter()
-        .map(|r| (r.reading.displacement, r.reading.force))
-        .collect();
-    LinePlot {
-        title: format!("{test}: crosshead force"),
-        x_label: DISPLACEMENT_LABEL.into(),
-        y_label: "force F (N)".into(),
-        series: vec![Series::new("simulation", points, LineStyle::Solid)],
-    }
-}
-
-const DISPLACEMENT_LABEL: &str = "crosshead displacement d (mm)";
-
-/// What names the columns and curves of a shear test (bias extension, picture frame).
-struct ShearTestNames {
-    title: &'static str,
-    /// The elements whose mean shear angle is watched.
-    zone: &'static str,
-    /// Column and curve label of the kinematic reference angle.
-    reference: (&'static str, &'static str),
-}
-
-const BIAS_EXTENSION: ShearTestNames = ShearTestNames {
-    title: "Bias extension",
-    zone: "central zone",
-    reference: ("shear_angle_pin_jointed_deg", "pin-jointed net"),
-};
-
-const PICTURE_FRAME: ShearTestNames = ShearTestNames {
-    title: "Picture frame",
-    zone: "interior",
-    reference: ("shear_angle_frame_deg", "frame (pin-jointed)"),
-};
-
-/// Report of a shear test whose rows give `(displacement, [shear angle, reference angle,
-/// normalised shear force])`: the three columns and a plot of the two angles.
-fn shear_test_report<R>(
-    names: &ShearTestNames,
-    rows: &[R],
-    values: fn(&R) -> (f64, [f64; 3]),
-) -> TestReport {
-    let rows: Vec<_> = rows.iter().map(values).collect();
-    let angle = |k: usize| rows.iter().map(|(d, v)| (*d, v[k])).collect::<Vec<_>>();
-    let plot = LinePlot {
-        title: format!("{}: shear angle of the {}", names.title, names.zone),
-        x_label: DISPLACEMENT_LABEL.into(),
-        y_label: "shear angle (°)".into(),
-        series: vec![
-            Series::new(
-                format!("simulation ({})", names.zone),
-                angle(0),
-                LineStyle::Solid,
-            ),
-            Series::new(names.reference.1, angle(1), LineStyle::Dashed),
-        ],
-    };
-    TestReport {
-        title: names.title,
-        columns: [
-            "shear_angle_deg",
-            names.reference.0,
-            "normalised_shear_force",
-        ],
-        rows: rows.into_iter().map(|(_, v)| v).collect(),
-        plots: vec![(PLOT_SUFFIXES[1], plot)],
-    }
-}
-
-fn bias_report(rows: &[BiasRow]) -> TestReport {
-    shear_test_report(&BIAS_EXTENSION, rows, |r| {
-        let cells = [
-            r.shear_angle,
-            r.shear_angle_pin_jointed,
-            r.normalised_shear_force,
-        ];
-        (r.displacement, cells)
-    })
-}
-
-fn picture_frame_report(rows: &[PictureFrameRow]) -> TestReport {
-    shear_test_report(&PICTURE_FRAME, rows, |r| {
-        let cells = [r.shear_angle, r.shear_angle_frame, r.normalised_shear_force];
-        (r.displacement, cells)
-    })
-}
-
-fn uniaxial_report(rows: &[UniaxialRow]) -> TestReport {
-    TestReport {
-        title: "Uniaxial tension",
-        columns: ["strain", "stress_resultant", "shear_angle_deg"],
-        rows: rows
-            .iter()
-            .map(|r| [r.strain, r.stress_resultant, r.shear_angle])
-            .collect(),
-        plots: Vec::new(),
-    }
 }
 
 fn print_summary(

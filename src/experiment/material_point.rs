@@ -5,10 +5,11 @@
 //! (three-point formulas, central inside, one-sided at the ends), so a history whose `F` is
 //! linear in time gets the exact `Cdot`.
 
+use crate::io::{check_finite_row, CsvTable, InputError};
 use crate::material::stress_free_stretch::{find_stress_free_stretch, StressSample};
 use crate::material::{
-    cauchy_stress, FibreDirections, Laminate, MaterialError, MaterialLaw, MembraneKinematics,
-    PointKinematics, ViscoHyperelasticMatrix,
+    cauchy_stress, FibreDirections, Laminate, MaterialCard, MaterialError, MaterialLaw,
+    MembraneKinematics, PointKinematics, ViscoHyperelasticMatrix,
 };
 use nalgebra::{Matrix2, Matrix3};
 use std::ops::{Add, Mul};
@@ -229,4 +230,189 @@ pub fn matrix_uniaxial_stress(
         previous_t = t;
     }
     Ok(out)
+}
+
+/// Which model a material-point test drives.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PointLayer {
+    /// Layer A alone: visco-hyperelastic matrix (3D history).
+    Matrix,
+    /// Layer B alone: woven fabric (3D history).
+    Fabric,
+    /// The whole A:B:A ply in plane stress (in-plane history).
+    Laminate,
+}
+
+/// History columns of a layer (matrix, fabric): time, the full 3D `F` by rows, temperature.
+pub const LAYER_COLUMNS: [&str; 11] = [
+    "t", "F11", "F12", "F13", "F21", "F22", "F23", "F31", "F32", "F33", "T",
+];
+/// Output columns of a layer: 2nd Piola–Kirchhoff and Cauchy stress (MPa).
+pub const LAYER_OUTPUT: [&str; 13] = [
+    "t", "S11", "S22", "S33", "S12", "S23", "S13", "sigma11", "sigma22", "sigma33", "sigma12",
+    "sigma23", "sigma13",
+];
+/// History columns of the laminate: time, the in-plane `F` by rows, temperature.
+pub const LAMINATE_COLUMNS: [&str; 6] = ["t", "F11", "F12", "F21", "F22", "T"];
+/// Output columns of the laminate: membrane resultants (N/mm) and thickness (mm).
+pub const LAMINATE_OUTPUT: [&str; 5] = ["t", "N11", "N22", "N12", "thickness"];
+
+impl PointLayer {
+    /// The columns its history must have, in this order.
+    pub fn history_columns(self) -> &'static [&'static str] {
+        match self {
+            Self::Matrix | Self::Fabric => &LAYER_COLUMNS,
+            Self::Laminate => &LAMINATE_COLUMNS,
+        }
+    }
+
+    /// The columns of its response.
+    pub fn output_columns(self) -> &'static [&'static str] {
+        match self {
+            Self::Matrix | Self::Fabric => &LAYER_OUTPUT,
+            Self::Laminate => &LAMINATE_OUTPUT,
+        }
+    }
+}
+
+/// The response of a material-point test: one row of [`PointLayer::output_columns`] per row
+/// of the history.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PointTable {
+    pub header: &'static [&'static str],
+    pub rows: Vec<Vec<f64>>,
+}
+
+/// `thermostamp material-point` after its arguments are read: drives `layer` of `card` (read
+/// from `card_origin`) with the warp at `angle` degrees from x through `history`, whose rows
+/// are [`PointLayer::history_columns`]. A bad row (time not increasing, `det F <= 0`, the
+/// material failing there) is an [`InputError`] at the table's line for the row.
+pub fn material_point(
+    card: &MaterialCard,
+    card_origin: &str,
+    layer: PointLayer,
+    angle: f64,
+    history: &CsvTable,
+) -> anyhow::Result<PointTable> {
+    let fibres = FibreDirections::in_plane(angle.to_radians());
+    let locate = |failure: PointFailure| {
+        InputError::at_line(
+            &history.origin,
+            history.lines[failure.index],
+            format!("{} (material card {card_origin})", failure.error),
+        )
+    };
+    let rows: Vec<Vec<f64>> = match layer {
+        PointLayer::Matrix | PointLayer::Fabric => {
+            let samples = point_history(history)?;
+            let law: &dyn MaterialLaw = match layer {
+                PointLayer::Matrix => card.matrix.as_deref().ok_or_else(|| {
+                    anyhow::anyhow!("{card_origin}: the card has no [matrix] section")
+                })?,
+                _ => card.fabric.as_ref(),
+            };
+            let response = drive_layer(law, fibres, &samples).map_err(locate)?;
+            response.iter().map(layer_row).collect()
+        }
+        PointLayer::Laminate => {
+            let samples = membrane_history(history)?;
+            let response = drive_laminate(&card.laminate, fibres, &samples).map_err(locate)?;
+            response.iter().map(laminate_row).collect()
+        }
+    };
+    let header = layer.output_columns();
+    // a response that is not a finite number comes from the card (a value the law cannot
+    // take, such as 1e308 for a thickness) driven through the history: the error names both,
+    // as the writer alone would name only a cell of an output nobody asked to read
+    for (i, row) in rows.iter().enumerate() {
+        check_finite_row(header, i + 1, row).map_err(|e| {
+            anyhow::anyhow!(
+                "{card_origin}: driven through {}, the response is not a finite number (output \
+                 {e})",
+                history.origin
+            )
+        })?;
+    }
+    Ok(PointTable { header, rows })
+}
+
+/// Checks times and volumes row by row, so that errors point at the line.
+fn check_row(table: &CsvTable, i: usize, det_f: f64) -> Result<(), InputError> {
+    let line = table.lines[i];
+    if i > 0 && table.rows[i][0] <= table.rows[i - 1][0] {
+        return Err(InputError::at_line(
+            &table.origin,
+            line,
+            format!(
+                "t = {} does not increase (previous t = {})",
+                table.rows[i][0],
+                table.rows[i - 1][0]
+            ),
+        ));
+    }
+    if det_f.is_nan() || det_f <= 0.0 {
+        return Err(InputError::at_line(
+            &table.origin,
+            line,
+            format!("det F = {det_f} <= 0: the deformation inverts or crushes the material"),
+        ));
+    }
+    Ok(())
+}
+
+fn point_history(table: &CsvTable) -> Result<Vec<PointSample>, InputError> {
+    table
+        .rows
+        .iter()
+        .enumerate()
+        .map(|(i, r)| {
+            let f = Matrix3::new(r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8], r[9]);
+            check_row(table, i, f.determinant())?;
+            Ok(PointSample {
+                t: r[0],
+                f,
+                temperature: r[10],
+            })
+        })
+        .collect()
+}
+
+fn membrane_history(table: &CsvTable) -> Result<Vec<MembraneSample>, InputError> {
+    table
+        .rows
+        .iter()
+        .enumerate()
+        .map(|(i, r)| {
+            let f = Matrix2::new(r[1], r[2], r[3], r[4]);
+            check_row(table, i, f.determinant())?;
+            Ok(MembraneSample {
+                t: r[0],
+                f,
+                temperature: r[5],
+            })
+        })
+        .collect()
+}
+
+/// Voigt-like order of the output: 11, 22, 33, 12, 23, 13.
+fn components(m: &Matrix3<f64>) -> [f64; 6] {
+    [
+        m[(0, 0)],
+        m[(1, 1)],
+        m[(2, 2)],
+        m[(0, 1)],
+        m[(1, 2)],
+        m[(0, 2)],
+    ]
+}
+
+fn layer_row(r: &PointResponse) -> Vec<f64> {
+    std::iter::once(r.t)
+        .chain(components(&r.s))
+        .chain(components(&r.sigma))
+        .collect()
+}
+
+fn laminate_row(r: &LaminateResponse) -> Vec<f64> {
+    vec![r.t, r.n[(0, 0)], r.n[(1, 1)], r.n[(0, 1)], r.thickness]
 }

@@ -7,3 +7,4 @@ pub mod material_point;
 pub mod picture_frame;
 pub mod sheet_test;
 pub mod uniaxial;
+pub mod virtual_test;

@@ -13,6 +13,7 @@
 
 pub mod card_key;
 pub mod card_section;
+pub mod commands;
 pub mod fabric_tension;
 pub mod least_squares;
 pub mod matrix;

@@ -71,23 +71,50 @@ pub fn read_manifest(path: &Path) -> Result<Vec<TensionCurve>, InputError> {
         .iter()
         .enumerate()
         .map(|(i, entry)| {
-            let at = |message: String| {
-                InputError::in_file(
-                    &origin,
-                    format!("[[curve]] #{} ({}): {message}", i + 1, entry.file.display()),
-                )
+            let spec = CurveSpec {
+                temperature: entry.temperature,
+                strain_rate: entry.strain_rate,
+                crosshead_speed: entry.crosshead_speed,
+                gauge_length: entry.gauge_length,
             };
-            let rate = strain_rate(entry).map_err(at)?;
-            if !entry.temperature.is_finite() {
-                return Err(at("temperature must be a finite number of °C".into()));
-            }
-            read_curve(&base.join(&entry.file), entry.temperature, rate)
+            let label = entry.file.display().to_string();
+            manifest_curve(&origin, (i + 1, &label), &spec, |t, rate| {
+                read_curve(&base.join(&entry.file), t, rate)
+            })
         })
         .collect()
 }
 
+/// The conditions of one curve of a manifest: its temperature (°C) and its strain rate,
+/// given (1/s) or as `crosshead_speed` (mm/s) over `gauge_length` (mm).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CurveSpec {
+    pub temperature: f64,
+    pub strain_rate: Option<f64>,
+    pub crosshead_speed: Option<f64>,
+    pub gauge_length: Option<f64>,
+}
+
+/// Checks the conditions of the `index`-th curve (from 1, `label` its file) of the manifest
+/// `origin` and reads it with `read(temperature, strain_rate)`.
+pub fn manifest_curve(
+    origin: &str,
+    (index, label): (usize, &str),
+    spec: &CurveSpec,
+    read: impl FnOnce(f64, f64) -> Result<TensionCurve, InputError>,
+) -> Result<TensionCurve, InputError> {
+    let at = |message: String| {
+        InputError::in_file(origin, format!("[[curve]] #{index} ({label}): {message}"))
+    };
+    let rate = strain_rate(spec).map_err(at)?;
+    if !spec.temperature.is_finite() {
+        return Err(at("temperature must be a finite number of °C".into()));
+    }
+    read(spec.temperature, rate)
+}
+
 /// `strain_rate`, or `crosshead_speed / gauge_length`; exactly one of the two forms.
-fn strain_rate(entry: &CurveEntry) -> Result<f64, String> {
+fn strain_rate(entry: &CurveSpec) -> Result<f64, String> {
     let rate = match (entry.strain_rate, entry.crosshead_speed, entry.gauge_length) {
         (Some(rate), None, None) => rate,
         (None, Some(speed), Some(length)) => {
