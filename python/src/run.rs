@@ -55,10 +55,7 @@ pub fn run_scenario(
 
 /// A rayon pool of `threads` workers (cut to the cores), `None` for the global pool of all
 /// cores.
-pub fn worker_pool(
-    py: Python<'_>,
-    threads: Option<usize>,
-) -> PyResult<Option<rayon::ThreadPool>> {
+pub fn worker_pool(py: Python<'_>, threads: Option<usize>) -> PyResult<Option<rayon::ThreadPool>> {
     let Some(requested) = threads else {
         return Ok(None);
     };

@@ -30,7 +30,13 @@ fn study_error(py: Python<'_>, message: impl std::fmt::Display) -> PyErr {
 
 /// The checked study of a study file's `text` (`base` relative to `base_dir`, `output.folder`
 /// to `run_dir`).
-fn open(py: Python<'_>, text: &str, origin: &str, base_dir: &Path, run_dir: &Path) -> PyResult<Study> {
+fn open(
+    py: Python<'_>,
+    text: &str,
+    origin: &str,
+    base_dir: &Path,
+    run_dir: &Path,
+) -> PyResult<Study> {
     py.detach(|| Study::from_text(text, origin, base_dir, run_dir))
         .map_err(|e| study_error(py, e))
 }
@@ -120,14 +126,19 @@ fn study_run_case(
     let case = study.case(number).ok_or_else(|| {
         study_error(
             py,
-            format!("case {number}: the study has cases 1 to {}", study.cases_count()),
+            format!(
+                "case {number}: the study has cases 1 to {}",
+                study.cases_count()
+            ),
         )
     })?;
     let result = py.detach(|| -> anyhow::Result<_> {
         identity::verify(&study)?;
         study.check_case(&case)?;
         let _folder = folder::take_shared(&study, command)?;
-        run_case_with(&study, &case, command, &|run: &CaseRun| Ok(run_here(run, command)))
+        run_case_with(&study, &case, command, &|run: &CaseRun| {
+            Ok(run_here(run, command))
+        })
     });
     let result = result.map_err(|e| study_error(py, e))?;
     Ok((result.status, result.reason, result.wall_seconds))
@@ -171,7 +182,13 @@ fn run_here(run: &CaseRun, command: &str) -> RunEnd {
         .build()
     {
         Ok(pool) => pool,
-        Err(e) => return logged(run, failed(format!("cannot start the worker threads: {e}")), ""),
+        Err(e) => {
+            return logged(
+                run,
+                failed(format!("cannot start the worker threads: {e}")),
+                "",
+            )
+        }
     };
     let done = match pool.install(|| form(&scenario, Some(&run.folder), None, command)) {
         Ok(done) => done,

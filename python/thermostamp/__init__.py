@@ -36,20 +36,27 @@ from .material import (
 )
 from .result import Check, Frame, Result
 from .scenario import Scenario
+from .study import FullFactorial, LatinHypercube, Range, Sobol, Study, StudySummary
 
 __all__ = [
     "Check",
     "FitResult",
     "Frame",
+    "FullFactorial",
     "HISTORY_COLUMNS",
     "InputError",
+    "LatinHypercube",
     "OutputError",
+    "Range",
     "Result",
     "RunFailed",
     "RunWarning",
     "Scenario",
     "ScenarioError",
+    "Sobol",
+    "Study",
     "StudyError",
+    "StudySummary",
     "TestResult",
     "ThermostampError",
     "__version__",
