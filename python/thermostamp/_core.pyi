@@ -49,3 +49,48 @@ def study_run_case(
 
 def study_summarise(text: str, origin: str, base_dir: str, run_dir: str, command: str) -> str:
     """Writes the study's summary and charts; the path of ``summary.csv``."""
+
+
+def material_point_table(card: str, layer: str, rows: Any, angle: float) -> dict[str, Any]:
+    """One material point through the history ``rows`` (2-D, the layer's columns in order)."""
+
+def point_history_columns(layer: str) -> list[str]:
+    """The history columns of ``layer`` (``matrix``, ``fabric`` or ``laminate``)."""
+
+def virtual_test(
+    kind: str,
+    card: str,
+    options: dict[str, Any],
+    output: Optional[str] = None,
+    threads: Optional[int] = None,
+    progress: Optional[Callable[[float, int, float], Any]] = None,
+    command: str = "",
+) -> tuple[dict[str, Any], Optional[BaseException]]:
+    """A virtual test (``uniaxial``, ``bias-extension``, ``picture-frame``) with every option."""
+
+def fit_matrix(
+    manifest: Optional[str],
+    curves: Sequence[tuple[Any, float, Optional[float], Optional[float], Optional[float]]],
+    card: Optional[str],
+    bulk_modulus: Optional[float],
+    poisson: Optional[float],
+    output: Optional[str],
+    plot: Optional[str],
+) -> dict[str, Any]:
+    """``fit matrix`` from a manifest or from curves."""
+
+def fit_fabric_tension(
+    card: str,
+    warp: Optional[Any],
+    weft: Optional[Any],
+    terms: Optional[int],
+    width: Optional[float],
+    output: Optional[str],
+    plot: Optional[str],
+) -> dict[str, Any]:
+    """``fit fabric-tension`` from strip curves."""
+
+def fit_shear(
+    card: str, data: Any, options: dict[str, Any], output: Optional[str], plot: Optional[str]
+) -> dict[str, Any]:
+    """``fit shear`` (analytic) from a bias-extension or picture-frame curve."""
