@@ -142,3 +142,27 @@ def test_a_bad_parameter_raises_a_study_error_naming_it(tmp_path):
     with pytest.raises(ts.StudyError) as caught:
         ts.Study(HEMISPHERE, parameters={"process.temperatur": [300.0]}, folder=tmp_path)
     assert "process.temperatur" in str(caught.value)
+
+
+def test_the_latin_hypercube_example_runs_in_reduced_form(tmp_path):
+    """examples/study-hemisphere-lhs.toml with 3 samples, 10 mm cells and 5 mm of stroke, in a
+    local process pool: every case done, each temperature in its own third of the range."""
+    text = (ROOT / "examples" / "study-hemisphere-lhs.toml").read_text()
+    reduced = (
+        text.replace('base = "hemisphere.toml"', f'base = "{HEMISPHERE}"')
+        .replace("samples = 16 ", "samples = 3 ")
+        .replace(
+            '"process.punch_speed" = [5.0, 10.0, 20.0]',
+            '"process.punch_speed" = [5.0, 10.0, 20.0]\n"blank.element_size" = [10.0]\n'
+            '"process.stroke" = [5.0]\n"output.frames" = [0]',
+        )
+        .replace('folder = "study-hemisphere-lhs-results"', f'folder = "{tmp_path / "out"}"')
+    )
+    assert reduced.count("[10.0]") == 1 and "samples = 3 " in reduced
+    path = tmp_path / "lhs.toml"
+    path.write_text(reduced)
+    summary = ts.Study.load(path).map(jobs=2)
+    assert summary.columns["status"] == ["done"] * 3
+    thirds = sorted(int((t - 280.0) / 40.0 * 3) for t in summary.columns["process.temperature"])
+    assert thirds == [0, 1, 2]
+    assert all(speed in (5.0, 10.0, 20.0) for speed in summary.columns["process.punch_speed"])
