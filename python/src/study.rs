@@ -60,7 +60,10 @@ fn study_open<'py>(
     Ok(dict)
 }
 
-/// Every case: its number, its parameters' values and its status, as `sweep --list`.
+/// A case as `sweep --list` shows it: its number, its parameters' values and its status.
+type CaseLine<'py> = (usize, Vec<Bound<'py, PyAny>>, String);
+
+/// Every case, as `sweep --list`.
 #[pyfunction]
 fn study_cases<'py>(
     py: Python<'py>,
@@ -68,7 +71,7 @@ fn study_cases<'py>(
     origin: &str,
     base_dir: PathBuf,
     run_dir: PathBuf,
-) -> PyResult<Vec<(usize, Vec<Bound<'py, PyAny>>, String)>> {
+) -> PyResult<Vec<CaseLine<'py>>> {
     let study = open(py, text, origin, &base_dir, &run_dir)?;
     let folder_exists = study.folder.exists();
     study
