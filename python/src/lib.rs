@@ -10,6 +10,7 @@ mod material;
 mod run;
 mod scenario;
 mod study;
+mod watch;
 
 use pyo3::prelude::*;
 

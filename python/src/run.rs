@@ -5,11 +5,11 @@
 
 use crate::errors::{input_error, output_error, scenario_error};
 use crate::frame::frame_dict;
+use crate::watch::{supervise, Beacon, Watch};
 use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::path::{Path, PathBuf};
-use std::time::{Duration, Instant};
 use thermostamp::experiment::sheet_test::Progress;
 use thermostamp::forming::advice::stop_advice;
 use thermostamp::forming::output::{
@@ -18,9 +18,6 @@ use thermostamp::forming::output::{
 use thermostamp::forming::{FormingModel, FormingRun, Scenario};
 use thermostamp::io::output_folder::take_folder;
 use thermostamp::solver::SolverError;
-
-/// How often, at most, the run looks at Python: the progress callable and pending signals.
-const PROGRESS_EVERY: Duration = Duration::from_millis(100);
 
 /// Runs the scenario of standalone `text`; returns the result as a dictionary and the
 /// exception that stopped it early (`KeyboardInterrupt`, or what the progress callable
@@ -38,11 +35,8 @@ pub fn run_scenario(
 ) -> PyResult<(Py<PyDict>, Option<PyErr>)> {
     let scenario = crate::scenario::checked(py, text, origin)?;
     let pool = worker_pool(py, threads)?;
-    let done = py.detach(|| match &pool {
-        Some(pool) => {
-            pool.install(|| form(&scenario, output.as_deref(), progress.as_ref(), &command))
-        }
-        None => form(&scenario, output.as_deref(), progress.as_ref(), &command),
+    let (done, raised) = supervise(py, pool.as_ref(), progress.as_ref(), |beacon| {
+        form(&scenario, output.as_deref(), Some(beacon), &command)
     });
     let done = match done {
         Ok(done) => done,
@@ -50,7 +44,7 @@ pub fn run_scenario(
         Err(Failure::Output(e)) => return Err(output_error(py, e)),
     };
     let dict = result_dict(py, &scenario, &done)?;
-    Ok((dict.unbind(), done.raised))
+    Ok((dict.unbind(), raised))
 }
 
 /// A rayon pool of `threads` workers (cut to the cores), `None` for the global pool of all
@@ -81,15 +75,14 @@ pub struct Done {
     pub forming: FormingModel,
     pub run: FormingRun,
     pub files: Vec<PathBuf>,
-    pub raised: Option<PyErr>,
 }
 
 /// Builds the model of `scenario` and runs it, writing into `output` (taken with `command`
-/// for its lock) when given.
+/// for its lock) when given, its progress left in `beacon` (whose stop flag stops it).
 pub fn form(
     scenario: &Scenario,
     output: Option<&Path>,
-    progress: Option<&Py<PyAny>>,
+    beacon: Option<&Beacon>,
     command: &str,
 ) -> Result<Done, Failure> {
     let forming = FormingModel::reporting(scenario, &mut |_| {}).map_err(Failure::Setup)?;
@@ -103,12 +96,18 @@ pub fn form(
         Some(dir) => Some(live_output(dir, scenario, &forming).map_err(Failure::Output)?),
         None => None,
     };
-    let mut watch = Watch::new(
-        progress,
-        forming.settings.end_time,
-        scenario.process.time_scaling,
+    let mut watch = beacon.map(|beacon| {
+        Watch::new(
+            beacon,
+            forming.settings.end_time,
+            scenario.process.time_scaling,
+        )
+    });
+    let run = thermostamp::forming::run::run(
+        &forming,
+        live,
+        watch.as_mut().map(|w| w as &mut dyn Progress),
     );
-    let run = thermostamp::forming::run::run(&forming, live, Some(&mut watch));
     let files = match output {
         Some(dir) if !run.records.is_empty() => {
             write_final_results(dir, scenario, &forming, &run).map_err(Failure::Output)?
@@ -119,53 +118,7 @@ pub fn form(
         forming,
         run,
         files,
-        raised: watch.raised,
     })
-}
-
-/// The run's progress handed to the Python callable, and the signals Python has pending:
-/// looked at every [`PROGRESS_EVERY`], the interpreter taken for as long as that takes.
-pub(crate) struct Watch<'a> {
-    callback: Option<&'a Py<PyAny>>,
-    end_time: f64,
-    time_scaling: f64,
-    last: Option<Instant>,
-    /// What stopped the run: `KeyboardInterrupt` or an exception of the callable.
-    pub(crate) raised: Option<PyErr>,
-}
-
-impl<'a> Watch<'a> {
-    pub(crate) fn new(callback: Option<&'a Py<PyAny>>, end_time: f64, time_scaling: f64) -> Self {
-        Self {
-            callback,
-            end_time,
-            time_scaling,
-            last: None,
-            raised: None,
-        }
-    }
-}
-
-impl Progress for Watch<'_> {
-    fn update(&mut self, time: f64, step: usize) {
-        let due = self.last.is_none_or(|t| t.elapsed() >= PROGRESS_EVERY);
-        if self.raised.is_some() || !(due || time >= self.end_time) {
-            return;
-        }
-        self.last = Some(Instant::now());
-        let fraction = (time / self.end_time).clamp(0.0, 1.0);
-        let process_time = time * self.time_scaling;
-        self.raised = Python::attach(|py| {
-            py.check_signals().err().or_else(|| {
-                let callback = self.callback?;
-                callback.call1(py, (fraction, step, process_time)).err()
-            })
-        });
-    }
-
-    fn interrupted(&self) -> bool {
-        self.raised.is_some()
-    }
 }
 
 /// The result as the Python `Result` is made from: status, summary, history columns (NumPy

@@ -4,6 +4,7 @@
 
 use crate::errors::raise;
 use crate::run::{form, Failure};
+use crate::watch::{supervise, Beacon};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::path::{Path, PathBuf};
@@ -11,6 +12,7 @@ use thermostamp::forming::advice::stop_advice;
 use thermostamp::forming::output::result_row;
 use thermostamp::forming::Scenario;
 use thermostamp::io::message::tidy_message;
+use thermostamp::solver::SolverError;
 use thermostamp::study::run::{case_status, run_case_with, unfinished, CaseRun, RunEnd};
 use thermostamp::study::summary::{rows, write_summary, SUMMARY_CSV};
 use thermostamp::study::{folder, identity, Study};
@@ -135,14 +137,18 @@ fn study_run_case(
             ),
         )
     })?;
-    let result = py.detach(|| -> anyhow::Result<_> {
+    let (result, interrupt) = supervise(py, None, None, |beacon| -> anyhow::Result<_> {
         identity::verify(&study)?;
         study.check_case(&case)?;
         let _folder = folder::take_shared(&study, command)?;
         run_case_with(&study, &case, command, &|run: &CaseRun| {
-            Ok(run_here(run, command))
+            run_here(run, command, beacon)
         })
     });
+    // Ctrl-C left the case unfinished: it is raised as such, not as the case's error
+    if let Some(interrupt) = interrupt {
+        return Err(interrupt);
+    }
     let result = result.map_err(|e| study_error(py, e))?;
     Ok((result.status, result.reason, result.wall_seconds))
 }
@@ -169,8 +175,10 @@ fn study_summarise(
 
 /// A case's forming run in this process, into its folder: what `thermostamp run` would print on
 /// standard error (the checks' warnings, advice, the error that stopped it) is the run's
-/// `stderr`, from which the study takes a failure's reason; the log gets the summary too.
-fn run_here(run: &CaseRun, command: &str) -> RunEnd {
+/// `stderr`, from which the study takes a failure's reason; the log gets the summary too. A
+/// run interrupted (Ctrl-C in the worker) is an error, not a failed case: the case is left
+/// unfinished, so that the study runs it again when resumed.
+fn run_here(run: &CaseRun, command: &str, beacon: &Beacon) -> anyhow::Result<RunEnd> {
     let failed = |message: String| RunEnd {
         success: false,
         stderr: format!("error: {}", tidy_message(&message)),
@@ -178,7 +186,7 @@ fn run_here(run: &CaseRun, command: &str) -> RunEnd {
     };
     let scenario = match Scenario::load(&run.scenario, &[]) {
         Ok(s) => s,
-        Err(e) => return logged(run, failed(e.to_string()), ""),
+        Err(e) => return Ok(logged(run, failed(e.to_string()), "")),
     };
     let pool = match rayon::ThreadPoolBuilder::new()
         .num_threads(run.threads)
@@ -186,18 +194,18 @@ fn run_here(run: &CaseRun, command: &str) -> RunEnd {
     {
         Ok(pool) => pool,
         Err(e) => {
-            return logged(
-                run,
-                failed(format!("cannot start the worker threads: {e}")),
-                "",
-            )
+            let message = format!("cannot start the worker threads: {e}");
+            return Ok(logged(run, failed(message), ""));
         }
     };
-    let done = match pool.install(|| form(&scenario, Some(&run.folder), None, command)) {
+    let done = match pool.install(|| form(&scenario, Some(&run.folder), Some(beacon), command)) {
         Ok(done) => done,
-        Err(Failure::Setup(message)) => return logged(run, failed(message), ""),
-        Err(Failure::Output(e)) => return logged(run, failed(format!("{e:#}")), ""),
+        Err(Failure::Setup(message)) => return Ok(logged(run, failed(message), "")),
+        Err(Failure::Output(e)) => return Ok(logged(run, failed(format!("{e:#}")), "")),
     };
+    if let Err(e @ SolverError::Interrupted { .. }) = &done.run.outcome {
+        anyhow::bail!("{}: {e}", run.folder.display());
+    }
     let mut stderr: Vec<String> = done
         .run
         .checks
@@ -222,7 +230,7 @@ fn run_here(run: &CaseRun, command: &str) -> RunEnd {
         stderr: stderr.join("\n"),
         exit_code: Some(if done.run.outcome.is_ok() { 0 } else { 1 }),
     };
-    logged(run, end, &summary.join("\n"))
+    Ok(logged(run, end, &summary.join("\n")))
 }
 
 /// An error and its causes, `: ` between them, as the command line prints an error.

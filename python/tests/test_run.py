@@ -93,7 +93,8 @@ def test_progress_is_called_up_to_the_end():
     assert all(isinstance(c[1], int) for c in calls)
 
 
-def test_ctrl_c_stops_the_run_and_keeps_a_valid_partial_result(tmp_path):
+@pytest.mark.parametrize("threads", [None, 1])
+def test_ctrl_c_stops_the_run_and_keeps_a_valid_partial_result(tmp_path, threads):
     def interrupt_once(fraction, step, time):
         # as a Ctrl-C would: the signal is seen at the run's next look at Python
         if step > 2 and not interrupted:
@@ -102,7 +103,7 @@ def test_ctrl_c_stops_the_run_and_keeps_a_valid_partial_result(tmp_path):
 
     interrupted = []
     with pytest.raises(KeyboardInterrupt) as caught:
-        ts.run(ts.Scenario.load(HEMISPHERE), output=tmp_path, progress=interrupt_once)
+        ts.run(ts.Scenario.load(HEMISPHERE), output=tmp_path, threads=threads, progress=interrupt_once)
     result = caught.value.result
     assert result.outcome == "interrupted" and result.status.startswith("interrupted at step")
     records = len(result.history["time"])

@@ -166,3 +166,26 @@ def test_the_latin_hypercube_example_runs_in_reduced_form(tmp_path):
     thirds = sorted(int((t - 280.0) / 40.0 * 3) for t in summary.columns["process.temperature"])
     assert thirds == [0, 1, 2]
     assert all(speed in (5.0, 10.0, 20.0) for speed in summary.columns["process.punch_speed"])
+
+
+def test_a_case_interrupted_is_left_to_run_again(tmp_path):
+    """Ctrl-C in the process running a case stops it without a result: the case is not
+    finished, not failed, and the study runs it again."""
+    import _thread
+    import threading
+
+    study = ts.Study(
+        HEMISPHERE,
+        parameters={"blank.element_size": [10.0], "output.frames": [0]},
+        folder=tmp_path / "out",
+    )
+    timer = threading.Timer(1.0, _thread.interrupt_main)
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            study.run_case(1)
+    finally:
+        timer.cancel()
+    assert study.cases()[0]["status"] == "not finished"
+    summary = study.map(jobs=1)
+    assert summary.columns["status"] == ["done"]

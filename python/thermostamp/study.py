@@ -164,7 +164,8 @@ class Study:
 
     def run_case(self, number):
         """Runs case ``number`` here (as ``thermostamp sweep --case N``): ``(status, reason,
-        wall_seconds)``."""
+        wall_seconds)``. Ctrl-C stops it with ``KeyboardInterrupt`` and leaves it unfinished:
+        the study runs it again."""
         return run_case(self._spec, number)
 
     def summarise(self):

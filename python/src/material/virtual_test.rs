@@ -4,7 +4,8 @@
 
 use super::{columns_dict, python_names};
 use crate::errors::{input_error, output_error};
-use crate::run::{outcome_kind, worker_pool, Watch};
+use crate::run::{outcome_kind, worker_pool};
+use crate::watch::{supervise, Watch};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::path::PathBuf;
@@ -109,35 +110,31 @@ fn virtual_test(
         solver,
     };
     let pool = worker_pool(py, threads)?;
-    let job = || -> Result<Done, Failure> {
+    let job = |beacon: &_| -> Result<Done, Failure> {
         let mut notes = Vec::new();
         let test = prepare(&card, specimen, &test_options, python_names, &mut |line| {
             notes.push(line)
         })
         .map_err(Failure::Input)?;
-        let start = |end_time| Watch::new(progress.as_ref(), end_time, test.time_scaling);
+        let start = |end_time| Watch::new(beacon, end_time, test.time_scaling);
         let folder = output.as_deref().map(|dir| (dir, command.as_str()));
-        let (outcome, watch) = test.run(folder, start).map_err(Failure::Output)?;
+        let (outcome, _watch) = test.run(folder, start).map_err(Failure::Output)?;
         Ok(Done {
             outcome,
-            raised: watch.raised,
             notes,
             chosen: test.chosen.clone(),
             time_scaling: test.time_scaling,
             estimated_steps: test.estimate.steps,
         })
     };
-    let done = py.detach(|| match &pool {
-        Some(pool) => pool.install(job),
-        None => job(),
-    });
+    let (done, raised) = supervise(py, pool.as_ref(), progress.as_ref(), job);
     let done = match done {
         Ok(done) => done,
         Err(Failure::Input(e)) => return Err(input_error(py, e)),
         Err(Failure::Output(e)) => return Err(output_error(py, e)),
     };
     let dict = result_dict(py, &done)?;
-    Ok((dict.unbind(), done.raised))
+    Ok((dict.unbind(), raised))
 }
 
 enum Failure {
@@ -147,7 +144,6 @@ enum Failure {
 
 struct Done {
     outcome: thermostamp::experiment::virtual_test::TestOutcome,
-    raised: Option<PyErr>,
     notes: Vec<String>,
     chosen: Vec<String>,
     time_scaling: f64,
