@@ -174,8 +174,24 @@ def test_the_last_frame_reaches_pandas_and_pyvista():
     assert "contact_status" in grid.point_data
 
 
-def test_a_busy_output_folder_raises_output_error(tmp_path):
-    (tmp_path / ".thermostamp.lock").write_text("")
-    # a lock file left by no live process is taken over; a held one is refused, tested in the CLI
-    result = ts.run(ts.Scenario.load(HEMISPHERE, set=QUICK), output=tmp_path)
-    assert result.ok
+def test_a_folder_another_run_is_writing_raises_output_error(tmp_path):
+    import subprocess
+
+    from conftest import cli_exe
+
+    other = subprocess.Popen(
+        [str(cli_exe()), "run", str(HEMISPHERE), "--output", str(tmp_path)],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    try:
+        deadline = time.time() + 60
+        while not (tmp_path / "forming.csv").exists():
+            assert other.poll() is None and time.time() < deadline
+            time.sleep(0.02)
+        with pytest.raises(ts.OutputError) as caught:
+            ts.run(ts.Scenario.load(HEMISPHERE, set=QUICK), output=tmp_path)
+        assert "thermostamp run" in str(caught.value) and isinstance(caught.value, OSError)
+    finally:
+        other.kill()
+        other.wait()
