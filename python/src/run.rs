@@ -17,6 +17,7 @@ use thermostamp::forming::output::{
 };
 use thermostamp::forming::{FormingModel, FormingRun, Scenario};
 use thermostamp::io::output_folder::take_folder;
+use thermostamp::solver::checks::CheckReport;
 use thermostamp::solver::SolverError;
 
 /// Runs the scenario of standalone `text`; returns the result as a dictionary and the
@@ -159,18 +160,21 @@ fn result_dict<'py>(
         None => None,
     };
     dict.set_item("frame", frame)?;
-    let checks: Vec<(String, String, String)> = run
-        .checks
-        .lines
-        .iter()
-        .map(|l| (l.name.to_string(), l.status.to_string(), l.figure.clone()))
-        .collect();
-    dict.set_item("checks", checks)?;
+    dict.set_item("checks", check_lines(&run.checks))?;
     dict.set_item("files", files.clone())?;
     let mut notes = forming.notes.clone();
     notes.extend(stop_advice(scenario, forming, run));
     dict.set_item("notes", notes)?;
     Ok(dict)
+}
+
+/// The run-time checks as `(name, status, figure)`, as `thermostamp.Check` takes them.
+pub(crate) fn check_lines(checks: &CheckReport) -> Vec<(String, String, String)> {
+    checks
+        .lines
+        .iter()
+        .map(|l| (l.name.to_string(), l.status.to_string(), l.figure.clone()))
+        .collect()
 }
 
 /// `finished`, `interrupted`, `output` (a result could not be written) or `failed` (the solver

@@ -157,7 +157,7 @@ class TestResult:
         return f"TestResult({self.status!r}, {len(self.history['time'])} records)"
 
 
-def _run_test(kind, card, options, output, threads, progress) -> TestResult:
+def _run_test(kind, card, output, threads, progress, **options) -> TestResult:
     if output is not None:
         output = os.fspath(output)
     command = f"python: thermostamp test {kind} ({os.fspath(card)})"
@@ -214,10 +214,7 @@ def uniaxial_test(
     threads: Optional[int] = None,
     progress: Optional[Callable[[float, int, float], Any]] = None,
 ) -> TestResult:
-    options = dict(locals())
-    for key in ("card", "output", "threads", "progress"):
-        del options[key]
-    return _run_test("uniaxial", card, options, output, threads, progress)
+    return _run_test("uniaxial", **locals())
 
 
 uniaxial_test.__doc__ = (
@@ -251,10 +248,7 @@ def bias_extension_test(
     threads: Optional[int] = None,
     progress: Optional[Callable[[float, int, float], Any]] = None,
 ) -> TestResult:
-    options = dict(locals())
-    for key in ("card", "output", "threads", "progress"):
-        del options[key]
-    return _run_test("bias-extension", card, options, output, threads, progress)
+    return _run_test("bias-extension", **locals())
 
 
 bias_extension_test.__doc__ = (
@@ -286,10 +280,7 @@ def picture_frame_test(
     threads: Optional[int] = None,
     progress: Optional[Callable[[float, int, float], Any]] = None,
 ) -> TestResult:
-    options = dict(locals())
-    for key in ("card", "output", "threads", "progress"):
-        del options[key]
-    return _run_test("picture-frame", card, options, output, threads, progress)
+    return _run_test("picture-frame", **locals())
 
 
 picture_frame_test.__doc__ = (

@@ -128,6 +128,16 @@ fn field(text: &str) -> String {
     }
 }
 
+/// The legend's cell of a wrinkled case (outlined), `threshold` the waviness above which a
+/// case counts as wrinkled (mm).
+fn wrinkled_legend(threshold: f64) -> LegendCell {
+    LegendCell {
+        label: format!("wrinkled: waviness above {threshold} mm"),
+        fill: None,
+        outlined: true,
+    }
+}
+
 /// Writes `summary.csv` and the charts into the study's folder; returns the files written.
 pub fn write_summary(study: &Study, rows: &[Row]) -> anyhow::Result<Vec<PathBuf>> {
     let mut header: Vec<String> = vec!["case".into()];
@@ -337,13 +347,7 @@ fn scatter(
     map.extent = Some((padded(x_span), padded(y_span.unwrap_or(measured_span))));
     map.axes = Some((parameter_title(&study.parameters[x_index].key), y_title));
     map.outlined = outlined;
-    if let Some(f) = flag {
-        map.legend.push(LegendCell {
-            label: format!("wrinkled: waviness above {f} mm"),
-            fill: None,
-            outlined: true,
-        });
-    }
+    map.legend.extend(flag.map(wrinkled_legend));
     let RGBColor(r, g, b) = MISSING_COLOUR;
     let missing_label = match y_span {
         Some(_) => "failed or not run".to_string(),
@@ -443,13 +447,7 @@ fn heat_map(
     map.ticks = Some((ticks(&xs), ticks(&ys)));
     map.outlined = outlined;
     map.cell_labels = cell_labels;
-    if let Some(f) = flag {
-        map.legend.push(LegendCell {
-            label: format!("wrinkled: waviness above {f} mm"),
-            fill: None,
-            outlined: true,
-        });
-    }
+    map.legend.extend(flag.map(wrinkled_legend));
     let RGBColor(r, g, b) = MISSING_COLOUR;
     map.legend.push(LegendCell {
         label: "failed or not run".into(),

@@ -4,7 +4,7 @@
 
 use super::{columns_dict, python_names};
 use crate::errors::{input_error, output_error};
-use crate::run::{outcome_kind, worker_pool};
+use crate::run::{check_lines, outcome_kind, worker_pool};
 use crate::watch::{supervise, Watch};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -188,13 +188,7 @@ fn result_dict<'py>(py: Python<'py>, done: &Done) -> PyResult<Bound<'py, PyDict>
         "history",
         columns_dict(py, &done.outcome.header, &done.outcome.history)?,
     )?;
-    let checks: Vec<(String, String, String)> = run
-        .checks
-        .lines
-        .iter()
-        .map(|l| (l.name.to_string(), l.status.to_string(), l.figure.clone()))
-        .collect();
-    dict.set_item("checks", checks)?;
+    dict.set_item("checks", check_lines(&run.checks))?;
     dict.set_item("files", done.outcome.files.clone())?;
     dict.set_item("notes", done.notes.clone())?;
     Ok(dict)
