@@ -89,6 +89,8 @@ fn main() {
             ply_lags: &[],
             ply_lists: &[],
             ply_faces: &[],
+            temperatures: &[],
+            bending_rigidities: &[],
         };
         // the next increment's first trial: every node a little farther along its way
         let positions: Vec<_> = pressed

@@ -79,7 +79,7 @@ fn laminate_time(laminate: &Laminate, fibres: FibreDirections, budget: Duration)
         let kin = MembraneKinematics {
             c: Matrix2::new(1.0, g, g, 1.0 + g * g),
             c_dot: Matrix2::new(0.0, 0.1, 0.1, 0.2 * g),
-            temperature: T,
+            temperature: T.into(),
             fibres,
         };
         black_box(

@@ -26,3 +26,4 @@ pub mod material;
 pub mod mesh;
 pub mod solver;
 pub mod study;
+pub mod thermal;

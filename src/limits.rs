@@ -340,6 +340,71 @@ pub const BENDING_RIGIDITY: Range = Range::closed(
     "N·mm",
     "a 10 mm plate of 1000 GPa bends with 8e7 N·mm",
 );
+/// Thermal conductivities (W/(m·K)).
+pub const CONDUCTIVITY: Range = Range::above(
+    0.0,
+    1000.0,
+    "W/(m·K)",
+    "copper conducts 400 W/(m·K); a polymer 0.2, a carbon fibre up to 100 along its axis",
+);
+/// Heat-transfer coefficients of a face: to the air, to a tool, between plies (W/(m²·K)).
+pub const HEAT_TRANSFER: Range = Range::closed(
+    0.0,
+    1e6,
+    "W/(m²·K)",
+    "still air gives 5-25, a prepreg pressed on a steel tool some hundreds to thousands",
+);
+/// Specific heats (J/(kg·K)).
+pub const SPECIFIC_HEAT: Range = Range::above(
+    0.0,
+    1e5,
+    "J/(kg·K)",
+    "water's 4186 J/(kg·K) is among the highest of all materials",
+);
+/// Latent heats of crystallisation (J/g of laminate).
+pub const LATENT_HEAT: Range = Range::closed(
+    0.0,
+    500.0,
+    "J/g",
+    "a fully crystalline polyethylene releases 293 J/g",
+);
+/// Emissivities of a surface.
+pub const EMISSIVITY: Range = Range::closed(0.0, 1.0, "", "a black body has 1");
+/// Times (s) of a process step: the transfer from the oven to the press.
+pub const PROCESS_TIME: Range = Range::closed(
+    0.0,
+    3600.0,
+    "s",
+    "an hour in air leaves any ply at room temperature",
+);
+/// The step of the heat equation (s of process time).
+pub const THERMAL_STEP: Range = Range::above(
+    0.0,
+    10.0,
+    "s",
+    "a ply on a tool cools through its thickness within a second",
+);
+/// Avrami exponents.
+pub const AVRAMI_EXPONENT: Range = Range::closed(
+    1.0,
+    4.0,
+    "",
+    "Avrami's n lies between 1 (rods, instantaneous nuclei) and 4 (spheres, sporadic nuclei)",
+);
+/// Crystallisation rates of Nakamura's law (1/s).
+pub const CRYSTALLISATION_RATE: Range = Range::above(
+    0.0,
+    1e6,
+    "1/s",
+    "a polymer crystallises within a millisecond at the fastest",
+);
+/// Contact pressures (MPa).
+pub const PRESSURE: Range = Range::closed(
+    0.0,
+    1000.0,
+    "MPa",
+    "thermoplastic composites are formed at a few MPa",
+);
 /// A share, from none to all: the yarns' compression stiffness over their tensile one.
 pub const FRACTION: Range = Range::closed(0.0, 1.0, "", "a share of the tensile stiffness");
 

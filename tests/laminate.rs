@@ -150,7 +150,7 @@ proptest! {
                 let fibres = FibreDirections::in_plane(angle);
                 let c_of = |f: &Matrix2<f64>| f.transpose() * f;
                 // the start of the step: the state reached from rest over one step
-                let first = BackwardEulerStep { c: c_of(&f_start), c_start: Matrix2::identity(), dt, temperature: T, fibres };
+                let first = BackwardEulerStep { c: c_of(&f_start), c_start: Matrix2::identity(), dt, temperature: T.into(), fibres };
                 let (_, start, _) = laminate.step_tangent(&first, &laminate.initial_state()).unwrap();
                 let step = BackwardEulerStep { c: c_of(&f), c_start: c_of(&f_start), ..first };
                 let (_, _, exact) = laminate.step_tangent(&step, &start).unwrap();
@@ -269,7 +269,7 @@ fn inverted_sheet_and_hot_sheet_are_errors() {
         .unwrap_err();
     assert!(matches!(e, MaterialError::NonPositiveVolume { .. }), "{e}");
     let hot = MembraneKinematics {
-        temperature: 400.0,
+        temperature: 400.0.into(),
         ..kinematics(&Matrix2::identity(), &Matrix2::zeros(), 0.0)
     };
     let e = laminate

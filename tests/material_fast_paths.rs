@@ -32,7 +32,7 @@ fn assert_same_history(a: &Laminate, b: &Laminate, temperature: f64) {
         let kin = MembraneKinematics {
             c: Matrix2::new(1.0 + 0.5 * g * g, g, g, 1.0 + g * g),
             c_dot: Matrix2::new(0.05, 0.3, 0.3, 0.2 * g),
-            temperature,
+            temperature: temperature.into(),
             fibres: FibreDirections::in_plane(0.3),
         };
         let ra = a.membrane_response(&kin, 1e-3, &mut sa).unwrap();
@@ -62,7 +62,7 @@ fn pinned_laminate_reports_temperatures_outside_the_tables() {
     let kin = MembraneKinematics {
         c: Matrix2::identity(),
         c_dot: Matrix2::zeros(),
-        temperature: hot,
+        temperature: hot.into(),
         fibres: FibreDirections::default(),
     };
     let plain = laminate.membrane_response(&kin, 0.0, &mut laminate.initial_state());
@@ -186,7 +186,7 @@ fn exact_slope_finds_the_stretch_of_the_differenced_slope() {
             let kin = MembraneKinematics {
                 c: Matrix2::new(1.0 + 0.3 * g, g, g, 1.0 + g * g),
                 c_dot: Matrix2::new(0.3 * speed, speed, speed, 2.0 * g * speed),
-                temperature: T,
+                temperature: T.into(),
                 fibres: FibreDirections::in_plane(0.3),
             };
             let ra = laminate.membrane_response(&kin, dt, &mut a).unwrap();

@@ -110,7 +110,7 @@ fn homogeneous_patch(kind: PatchMesh) {
     let kin = MembraneKinematics {
         c: f2.transpose() * f2,
         c_dot: Matrix2::zeros(),
-        temperature: 300.0,
+        temperature: 300.0.into(),
         fibres: FibreDirections::in_plane(angle),
     };
     let laminate = elastic_t300();
@@ -295,7 +295,7 @@ fn stable_step_is_below_the_critical_step_of_the_element() {
                             &MembraneKinematics {
                                 c: Matrix2::identity(),
                                 c_dot: Matrix2::zeros(),
-                                temperature: 20.0,
+                                temperature: 20.0.into(),
                                 fibres: FibreDirections::default(),
                             },
                             &laminate.initial_state(),
@@ -328,7 +328,7 @@ fn stable_step_is_below_the_critical_step_of_the_element() {
             let kin = MembraneKinematics {
                 c: Matrix2::identity(),
                 c_dot: Matrix2::zeros(),
-                temperature: 20.0,
+                temperature: 20.0.into(),
                 fibres: e.fibres,
             };
             let modulus = laminate

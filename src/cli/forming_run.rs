@@ -8,10 +8,11 @@ use super::shared::{
 use crate::forming::advice::stop_advice;
 use crate::forming::output::{live_output, products, write_final_results};
 use crate::forming::preflight::implicit_advice;
-use crate::forming::run::ply_measures;
+use crate::forming::run::{frozen_areas, ply_measures};
 use crate::forming::{run::FormingRun, FormingModel, Scenario};
 use crate::solver::estimate::RunEstimate;
 use crate::solver::SolverKind;
+use crate::thermal::blank::FieldExtremes;
 use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
@@ -84,6 +85,9 @@ fn forming(args: &Args) -> anyhow::Result<()> {
         },
     };
     print_summary(&scenario, &forming, &result, &files);
+    if let Some(warning) = frozen_warning(&forming, &result) {
+        eprintln!("{warning}");
+    }
     if let Some(advice) = stop_advice(&scenario, &forming, &result) {
         eprintln!("{advice}");
     }
@@ -189,6 +193,7 @@ fn print_summary(
     ]);
     if let Some(state) = result.formed_state() {
         rows.extend(ply_rows(forming, state));
+        rows.extend(heat_rows(scenario, forming, result, state));
     }
     print_checked_table(&rows, &result.checks, &forming.estimate, files);
 }
@@ -219,6 +224,91 @@ fn ply_rows(forming: &FormingModel, state: &crate::solver::State) -> Vec<(&'stat
             ("ply", line)
         })
         .collect()
+}
+
+/// A non-isothermal run's rows: the blank's temperatures at the start and the end of the
+/// stroke, the area that froze (layer by layer) and where the heat went.
+fn heat_rows(
+    scenario: &Scenario,
+    forming: &FormingModel,
+    result: &FormingRun,
+    state: &crate::solver::State,
+) -> Vec<(&'static str, String)> {
+    let (Some(heat), Some(thermal), Some(first), Some(last)) = (
+        &scenario.heat,
+        &state.thermal,
+        result.records.first(),
+        result.records.last(),
+    ) else {
+        return Vec::new();
+    };
+    let range = |t: &FieldExtremes| format!("{:.1} to {:.1} °C (mean {:.1})", t.min, t.max, t.mean);
+    let mut tools = format!("punch {} °C, die {} °C", heat.punch, heat.die);
+    if let (Some(h), true) = (heat.holder, forming.holder_tool.is_some()) {
+        tools += &format!(", holder {h} °C");
+    }
+    let mut rows = vec![
+        (
+            "blank temperature",
+            format!(
+                "{} °C out of the oven, {} s in air: {} at the stroke's start, {} at its end",
+                heat.blank_temperature,
+                heat.transfer_time,
+                range(&first.temperature),
+                range(&last.temperature)
+            ),
+        ),
+        ("tools", tools),
+    ];
+    if let Some((per_layer, any)) = frozen_areas(&forming.model, state) {
+        let layers = forming.model.plies[0].laminate.layers();
+        let by_layer: Vec<String> = per_layer
+            .iter()
+            .zip(layers)
+            .enumerate()
+            .map(|(l, (a, layer))| format!("layer {} ({}) {a:.0}", l + 1, layer.law.name()))
+            .collect();
+        rows.push((
+            "frozen",
+            format!(
+                "{any:.0} mm^2 of the blank froze before the end of the stroke ({} mm^2)",
+                by_layer.join(", ")
+            ),
+        ));
+    }
+    let q = &thermal.heat;
+    let joules = |x: f64| x * 1e-3;
+    let to_tools: f64 = q.to_tools.iter().sum();
+    rows.push((
+        "heat",
+        format!(
+            "{:.2} J into the tools, {:.2} J into the air, {:.2} J released by crystallisation, \
+             {:.2} J of friction; the blank's heat content changed by {:.2} J (balance {:.1e} \
+             of the largest flow)",
+            joules(to_tools),
+            joules(q.to_air),
+            joules(q.latent),
+            joules(q.friction),
+            joules(q.stored),
+            q.imbalance().abs() / q.scale().max(f64::MIN_POSITIVE)
+        ),
+    ));
+    rows
+}
+
+/// Where a non-isothermal run left frozen layers before the end of the stroke: what an engineer
+/// must know before trusting the part's shape there.
+fn frozen_warning(forming: &FormingModel, result: &FormingRun) -> Option<String> {
+    let state = result.formed_state()?;
+    let (_, any) = frozen_areas(&forming.model, state)?;
+    (any > 0.0).then(|| {
+        format!(
+            "warning: {any:.0} mm^2 of the blank froze before the end of the stroke (a layer's \
+             crystallinity past the card's frozen_at): it stopped flowing there, and the part \
+             may not take the tool's shape; see the frames' `frozen` and temperature-map.png \
+             (hotter blank, warmer tools or a shorter transfer)"
+        )
+    })
 }
 
 /// The solver, and for the implicit one its increments, iterations and time split.

@@ -37,6 +37,9 @@ pub struct NodeContact {
     pub force: Vector3<f64>,
     pub tangential: Vec<Vector3<f64>>,
     pub normal_force: Vec<f64>,
+    /// Per tool, the unit normal of its surface at the node, towards the node (zero when not
+    /// touching): the side of the blank the tool is on.
+    pub normals: Vec<Vector3<f64>>,
     pub near: Vec<NearTriangles>,
 }
 
@@ -170,6 +173,7 @@ fn node_contact(
     contact.force = Vector3::zeros();
     contact.tangential.resize(tools.len(), Vector3::zeros());
     contact.normal_force.resize(tools.len(), 0.0);
+    contact.normals.resize(tools.len(), Vector3::zeros());
     contact.near.resize(tools.len(), NearTriangles::default());
     for (k, tool) in tools.iter().enumerate() {
         let moving = (translations[k], tool_velocities[k]);
@@ -210,6 +214,7 @@ fn node_tool_force(
         _ => {
             contact.tangential[k] = Vector3::zeros();
             contact.normal_force[k] = 0.0;
+            contact.normals[k] = Vector3::zeros();
             return Vector3::zeros();
         }
     };
@@ -229,5 +234,6 @@ fn node_tool_force(
     };
     contact.tangential[k] = tangential;
     contact.normal_force[k] = normal_force;
+    contact.normals[k] = normal;
     normal * normal_force + tangential
 }

@@ -147,9 +147,21 @@ impl Bending {
     /// Bending energy of triangle `t` (N·mm) and its forces `dW/dx` on its patch nodes,
     /// written to `forces` (as many as the patch has nodes).
     pub fn forces(&self, t: &BendingPatch, x: &[Vector3<f64>], forces: &mut [Vector3<f64>]) -> f64 {
+        self.forces_with(t, &t.rigidity, x, forces)
+    }
+
+    /// [`Self::forces`] with the rigidity `b` instead of the patch's own: that of the ply at
+    /// its current temperature in a non-isothermal run (docs/model.md §9).
+    pub fn forces_with(
+        &self,
+        t: &BendingPatch,
+        b: &BendingRigidity,
+        x: &[Vector3<f64>],
+        forces: &mut [Vector3<f64>],
+    ) -> f64 {
         let frame = CurrentPlane::of(t, x);
         let k = t.curvature(&frame, x) - t.rest_curvature;
-        let (energy, dw_dk) = self.energy_and_moments(t, &k);
+        let (energy, dw_dk) = self.energy_and_moments(t, b, &k);
         forces.fill(Vector3::zeros());
         let mut lever = Vector3::zeros();
         // the corners' heights are zero whatever they do: only the 1-ring's count
@@ -172,6 +184,17 @@ impl Bending {
     /// which the Gauss–Newton part leaves out (small next to it while the heights over the
     /// patch are small against its size, docs/solver.md).
     pub fn stiffness(&self, t: &BendingPatch, x: &[Vector3<f64>], exact: bool) -> DMatrix<f64> {
+        self.stiffness_with(t, &t.rigidity, x, exact)
+    }
+
+    /// [`Self::stiffness`] with the rigidity `b` instead of the patch's own.
+    pub fn stiffness_with(
+        &self,
+        t: &BendingPatch,
+        b: &BendingRigidity,
+        x: &[Vector3<f64>],
+        exact: bool,
+    ) -> DMatrix<f64> {
         let size = 3 * t.nodes.len();
         let frame = CurrentPlane::of(t, x);
         // J: row m the gradient of curvature component m
@@ -192,38 +215,48 @@ impl Bending {
                 }
             }
         }
-        let h = self.curvature_hessian(t);
+        let h = self.curvature_hessian(t, b);
         let mut stiffness = jacobian.transpose() * h * jacobian;
         if exact {
             let k = t.curvature(&frame, x) - t.rest_curvature;
-            let moments = self.energy_and_moments(t, &k).1;
+            let moments = self.energy_and_moments(t, b, &k).1;
             add_moment_stiffness(t, x, &frame, &moments, &mut stiffness);
         }
         stiffness
     }
 
     /// `d^2 (A W) / dk^2`, constant: the energy is quadratic in the curvature change.
-    fn curvature_hessian(&self, t: &BendingPatch) -> Matrix3<f64> {
+    fn curvature_hessian(&self, t: &BendingPatch, b: &BendingRigidity) -> Matrix3<f64> {
         let mut h = Matrix3::zeros();
         for m in 0..3 {
             let mut unit = Vector3::zeros();
             unit[m] = 1.0;
-            h.set_column(m, &self.energy_and_moments(t, &unit).1);
+            h.set_column(m, &self.energy_and_moments(t, b, &unit).1);
         }
         h
     }
 
     /// Bending energy of triangle `t` (N·mm).
     pub fn energy(&self, t: &BendingPatch, x: &[Vector3<f64>]) -> f64 {
-        let frame = CurrentPlane::of(t, x);
-        let k = t.curvature(&frame, x) - t.rest_curvature;
-        self.energy_and_moments(t, &k).0
+        self.energy_with(t, &t.rigidity, x)
     }
 
-    /// `A W(k)` and `A dW/dk` for the curvature change `k = (k_XX, k_YY, k_XY)`.
-    fn energy_and_moments(&self, t: &BendingPatch, k: &Vector3<f64>) -> (f64, Vector3<f64>) {
+    /// [`Self::energy`] with the rigidity `b` instead of the patch's own.
+    pub fn energy_with(&self, t: &BendingPatch, b: &BendingRigidity, x: &[Vector3<f64>]) -> f64 {
+        let frame = CurrentPlane::of(t, x);
+        let k = t.curvature(&frame, x) - t.rest_curvature;
+        self.energy_and_moments(t, b, &k).0
+    }
+
+    /// `A W(k)` and `A dW/dk` for the curvature change `k = (k_XX, k_YY, k_XY)` with the
+    /// rigidity `b`.
+    fn energy_and_moments(
+        &self,
+        t: &BendingPatch,
+        b: &BendingRigidity,
+        k: &Vector3<f64>,
+    ) -> (f64, Vector3<f64>) {
         let kappa = Matrix2::new(k.x, k.z, k.z, k.y);
-        let b = &t.rigidity;
         let (aa, bb, ab) = (
             t.warp.dot(&(kappa * t.warp)),
             t.weft.dot(&(kappa * t.weft)),
@@ -247,7 +280,17 @@ impl Bending {
     /// `6 x 16 B A / h^4` on a lumped mass of at least `m A / 3`: `omega^2 <= 288 B / (m h^4)`,
     /// `dt = 2 / omega` (the buckling test runs with it at a safety of 0.9).
     pub fn stable_step(&self, t: &BendingPatch, mass_per_area: f64) -> f64 {
-        let b = t.rigidity.warp.max(t.rigidity.weft);
+        self.stable_step_with(t, &t.rigidity, mass_per_area)
+    }
+
+    /// [`Self::stable_step`] with the rigidity `rigidity` instead of the patch's own.
+    pub fn stable_step_with(
+        &self,
+        t: &BendingPatch,
+        rigidity: &BendingRigidity,
+        mass_per_area: f64,
+    ) -> f64 {
+        let b = rigidity.warp.max(rigidity.weft);
         let omega_sq = 288.0 * b / (mass_per_area * t.altitude.powi(4));
         if omega_sq > 0.0 {
             2.0 / omega_sq.sqrt()

@@ -147,7 +147,7 @@ pub fn drive_laminate(
             let kin = MembraneKinematics {
                 c: c[i],
                 c_dot: c_dot[i],
-                temperature: sample.temperature,
+                temperature: sample.temperature.into(),
                 fibres,
             };
             let dt = sample.t - previous_t;

@@ -181,7 +181,7 @@ pub fn pin_jointed_kinematics(gamma: f64, gamma_rate: f64, temperature: f64) -> 
     MembraneKinematics {
         c: Matrix2::new(2.0 * s * s, 0.0, 0.0, 2.0 * c * c),
         c_dot: Matrix2::new(-cos_gamma, 0.0, 0.0, cos_gamma) * gamma_rate,
-        temperature,
+        temperature: temperature.into(),
         fibres: FibreDirections::in_plane(std::f64::consts::FRAC_PI_4),
     }
 }

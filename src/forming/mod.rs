@@ -4,6 +4,7 @@
 pub mod advice;
 pub mod drape_preview;
 pub mod export;
+pub mod heat;
 pub mod layup;
 pub mod output;
 pub mod pictures;

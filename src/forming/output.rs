@@ -22,7 +22,7 @@ pub const SERIES: &str = "forming";
 
 /// The history's columns. `time` is process time, the solver's `solver_time` times
 /// `process.time_scaling`, as the frames' times are.
-pub const HISTORY_COLUMNS: [&str; 19] = [
+pub const HISTORY_COLUMNS: [&str; 23] = [
     "time",
     "stroke",
     "punch_force",
@@ -41,11 +41,15 @@ pub const HISTORY_COLUMNS: [&str; 19] = [
     "tool_work",
     "external_work",
     "energy_balance_error",
+    "temperature_min",
+    "temperature_mean",
+    "temperature_max",
+    "frozen_area",
     "solver_time",
 ];
 
 /// One record as a row of [`HISTORY_COLUMNS`].
-pub fn history_row(r: &FormingRecord, time_scaling: f64) -> [f64; 19] {
+pub fn history_row(r: &FormingRecord, time_scaling: f64) -> [f64; 23] {
     let e = &r.energies;
     [
         r.time * time_scaling,
@@ -66,6 +70,10 @@ pub fn history_row(r: &FormingRecord, time_scaling: f64) -> [f64; 19] {
         e.tool_work,
         e.external_work,
         e.balance_error(),
+        r.temperature.min,
+        r.temperature.mean,
+        r.temperature.max,
+        r.frozen_area,
         r.time,
     ]
 }
@@ -141,6 +149,15 @@ pub fn write_final_results(
     Ok(files)
 }
 
+/// The columns a non-isothermal run adds to its result row, after the plies': the blank's
+/// coldest, mean and hottest temperature (°C) and its frozen area (mm²) at the end.
+pub const THERMAL_RESULT_COLUMNS: [&str; 4] = [
+    "temperature_min",
+    "temperature_mean",
+    "temperature_max",
+    "frozen_area",
+];
+
 /// The run's final measures: how it ended and [`RESULT_COLUMNS`] after the status, then five
 /// columns per ply of a layup ([`ply_columns`]); `None` where the run has no value (a flange
 /// measure on tools without a flange, a run stopped before its first record).
@@ -215,6 +232,15 @@ pub fn result_row(scenario: &Scenario, forming: &FormingModel, result: &FormingR
                 ply.and_then(|p| flange(p.wrinkles.waviness)),
             ]);
         }
+    }
+    if model.heat.is_some() {
+        names.extend(THERMAL_RESULT_COLUMNS.map(String::from));
+        values.extend([
+            last.map(|r| r.temperature.min),
+            last.map(|r| r.temperature.mean),
+            last.map(|r| r.temperature.max),
+            last.map(|r| r.frozen_area),
+        ]);
     }
     ResultRow {
         status: outcome_status(&result.outcome),

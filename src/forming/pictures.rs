@@ -22,15 +22,17 @@ pub const SHEAR_BLANK: &str = "forming-shear-blank.png";
 pub const WRINKLE_MAP: &str = "forming-wrinkle-map.png";
 pub const THICKNESS_MAP: &str = "forming-thickness-map.png";
 pub const SLIP_MAP: &str = "forming-slip-map.png";
+pub const TEMPERATURE_MAP: &str = "forming-temperature-map.png";
 
 /// Every picture a run may write, by which a later run into the folder finds and clears them.
-pub const PICTURES: [&str; 6] = [
+pub const PICTURES: [&str; 7] = [
     FORCE_PLOT,
     SHEAR_MAP,
     SHEAR_BLANK,
     WRINKLE_MAP,
     THICKNESS_MAP,
     SLIP_MAP,
+    TEMPERATURE_MAP,
 ];
 
 /// Size of the maps and of the force plot (pixels).
@@ -87,6 +89,9 @@ pub fn write_pictures(
     if forming.model.plies.len() > 1 {
         maps.push((SLIP_MAP, slip_map(forming, state, &run)));
     }
+    if let Some(map) = temperature_map(forming, state, &outlines, &run) {
+        maps.push((TEMPERATURE_MAP, map));
+    }
     for (name, map) in maps {
         let path = dir.join(name);
         let frame = write_map_png(&path, &map, MAP_SIZE.0, MAP_SIZE.1)?;
@@ -118,9 +123,15 @@ pub fn run_line(
     };
     // the card's name without its parenthesised remarks, which would not fit a title
     let card = forming.card.name.split(" (").next().unwrap_or_default();
+    let temperature = match &scenario.heat {
+        Some(h) => format!(
+            "blank {} °C, {} s in air, punch {} °C",
+            h.blank_temperature, h.transfer_time, h.punch
+        ),
+        None => format!("{} °C", p.temperature),
+    };
     format!(
-        "{card}, {} °C, {holder}, {stroke}, {}",
-        p.temperature,
+        "{card}, {temperature}, {holder}, {stroke}, {}",
         forming.solver.name()
     )
 }
@@ -214,6 +225,46 @@ fn mark_shear(map: &mut MapPlot, locking: Option<f64>) {
         flags_cells: true,
     });
     mark_cell(map, largest, |v| format!("max {v:.1}°"));
+}
+
+/// `forming-temperature-map.png` of a non-isothermal run: each cell's temperature through its
+/// thickness (the layers' mean, weighted by their thickness) on the formed part, iso view, at
+/// the end of the stroke, the coldest marked. `None` for an isothermal run.
+fn temperature_map(
+    forming: &FormingModel,
+    state: &State,
+    outlines: &[Outline],
+    run: &str,
+) -> Option<MapPlot> {
+    let (heat, thermal) = (forming.model.heat.as_ref()?, state.thermal.as_ref()?);
+    let blank = &heat.blank;
+    let layers = blank.layers();
+    let shares = blank.layer_thickness_shares();
+    let temperatures = blank.element_layer_temperatures(thermal);
+    let values: Vec<f64> = (0..forming.model.elements.len())
+        .map(|k| {
+            let share = &shares[blank.ply_of_element(k)];
+            (0..layers)
+                .map(|l| share[l] * temperatures[k * layers + l])
+                .sum()
+        })
+        .collect();
+    let view = View::iso(stroke_axis(forming));
+    let title = format!("Temperature through the thickness at the end (iso view)\n{run}");
+    let mut map = part_map(
+        forming,
+        (&state.positions, &view),
+        outlines,
+        (
+            title,
+            values,
+            "temperature, mean through the ply (°C)".into(),
+        ),
+    );
+    let (low, high) = span(&map.values);
+    map.scale = Some((low, high));
+    mark_cell(&mut map, smallest, |v| format!("coldest {v:.1} °C"));
+    Some(map)
 }
 
 /// `forming-thickness-map.png`: the thickness change `t / t0 - 1` of each cell (the
@@ -687,6 +738,13 @@ fn largest(values: &[f64]) -> Option<usize> {
     (0..values.len())
         .filter(|&k| values[k].is_finite())
         .max_by(|&a, &b| values[a].total_cmp(&values[b]))
+}
+
+/// The index of the smallest finite value.
+fn smallest(values: &[f64]) -> Option<usize> {
+    (0..values.len())
+        .filter(|&k| values[k].is_finite())
+        .min_by(|&a, &b| values[a].total_cmp(&values[b]))
 }
 
 /// The index of the finite value farthest from zero.

@@ -171,7 +171,7 @@ pub fn estimate_from_keys(
                     &MembraneKinematics {
                         c: Matrix2::identity(),
                         c_dot: Matrix2::zeros(),
-                        temperature: p.temperature,
+                        temperature: p.temperature.into(),
                         fibres: Default::default(),
                     },
                     &card.laminate.initial_state(),

@@ -9,6 +9,7 @@ use crate::solver::checks::{self, CheckReport, CheckSettings};
 use crate::solver::implicit::{self, ImplicitSettings, ImplicitStatistics};
 use crate::solver::{estimate, explicit};
 use crate::solver::{Energies, Model, Observer, SolverError, SolverKind, State};
+use crate::thermal::blank::FieldExtremes;
 use nalgebra::Vector3;
 use std::time::Instant;
 
@@ -33,6 +34,10 @@ pub struct FormingRecord {
     /// Wrinkling of the flange ([`Wrinkles`]).
     pub wrinkles: Wrinkles,
     pub energies: Energies,
+    /// The blank's coldest, mean and hottest temperature (°C; the run's own in an isothermal
+    /// run) and the area where a layer has frozen (mm²).
+    pub temperature: FieldExtremes,
+    pub frozen_area: f64,
 }
 
 /// A finished (or stopped) forming run.
@@ -118,6 +123,8 @@ impl Observer for Recorder<'_, '_, '_> {
             max_shear: max_shear_angle(model, state),
             wrinkles: flange_wrinkles(f, state, &self.nodal_area),
             energies: state.energies,
+            temperature: temperature_extremes(model, state),
+            frozen_area: frozen_area(model, state),
         });
         self.steps = state.step;
         self.last_recorded = Some(state.clone());
@@ -138,6 +145,30 @@ impl Observer for Recorder<'_, '_, '_> {
         self.stopping = self.progress.as_deref().is_some_and(|p| p.interrupted());
         self.stopping
     }
+}
+
+/// The blank's coldest, mean and hottest temperature: the run's own where it is isothermal.
+pub fn temperature_extremes(model: &Model, state: &State) -> FieldExtremes {
+    match (&model.heat, &state.thermal) {
+        (Some(heat), Some(thermal)) => heat.blank.extremes(thermal),
+        _ => FieldExtremes {
+            min: model.temperature,
+            mean: model.temperature,
+            max: model.temperature,
+        },
+    }
+}
+
+/// The reference area of the elements where a layer has frozen (mm²); 0 in an isothermal run.
+pub fn frozen_area(model: &Model, state: &State) -> f64 {
+    frozen_areas(model, state).map_or(0.0, |(_, any)| any)
+}
+
+/// `BlankHeat::frozen_areas` of a non-isothermal run's state: per layer, and any layer.
+pub fn frozen_areas(model: &Model, state: &State) -> Option<(Vec<f64>, f64)> {
+    let (heat, thermal) = (model.heat.as_ref()?, state.thermal.as_ref()?);
+    let areas: Vec<f64> = model.elements.iter().map(|e| e.area).collect();
+    Some(heat.blank.frozen_areas(thermal, &areas))
 }
 
 /// Runs the forming model, recording at every output interval; `output` is written as the

@@ -2,6 +2,7 @@
 //! checked. Unknown keys and inconsistent values are errors that name the key; any scalar can
 //! be overridden from the command line (`--set process.temperature=310`).
 
+use super::heat::{heat_scenario, HeatScenario, ThermalTable, ToolTemperatures};
 use crate::contact::ply_contact::FilmFriction;
 use crate::io::{from_toml_text, from_toml_value};
 use crate::limits::{
@@ -25,6 +26,9 @@ pub struct Scenario {
     pub tools: ToolSet,
     pub process: Process,
     pub output: Output,
+    /// The blank's temperature field of a non-isothermal run; `None`: isothermal at
+    /// `process.temperature`.
+    pub heat: Option<HeatScenario>,
 }
 
 /// The blank: one ply of one material card, or a layup of plies, either a rectangle meshed
@@ -775,10 +779,29 @@ struct ToolsTable {
     die_fillet_radius: Option<f64>,
     holder_inner_radius: Option<f64>,
     resolution: Option<f64>,
-    punch: Option<ToolFile>,
-    die: Option<ToolFile>,
-    holder: Option<ToolFile>,
+    punch: Option<ToolTable>,
+    die: Option<ToolTable>,
+    holder: Option<ToolTable>,
     flange_radius: Option<f64>,
+    /// Every tool's temperature in a non-isothermal run, where a tool gives none of its own.
+    temperature: Option<f64>,
+}
+
+/// `tools.punch` etc. as written: a surface read from a file (with `shape = "files"`), and the
+/// tool's temperature in a non-isothermal run.
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ToolTable {
+    file: Option<PathBuf>,
+    element_set: Option<String>,
+    temperature: Option<f64>,
+}
+
+impl ToolTable {
+    /// Whether it names a surface (a file or a set of one).
+    fn names_a_surface(&self) -> bool {
+        self.file.is_some() || self.element_set.is_some()
+    }
 }
 
 impl ToolsTable {
@@ -788,10 +811,11 @@ impl ToolsTable {
         if self.shape == "files" {
             return self.files(folder).map(ToolSet::Files);
         }
+        let surface = |t: &Option<ToolTable>| t.as_ref().is_some_and(ToolTable::names_a_surface);
         for (key, given) in [
-            ("punch", self.punch.is_some()),
-            ("die", self.die.is_some()),
-            ("holder", self.holder.is_some()),
+            ("punch", surface(&self.punch)),
+            ("die", surface(&self.die)),
+            ("holder", surface(&self.holder)),
             ("flange_radius", self.flange_radius.is_some()),
         ] {
             if given {
@@ -815,6 +839,17 @@ impl ToolsTable {
         }))
     }
 
+    /// The tools' `temperature` keys.
+    fn temperatures(&self) -> ToolTemperatures {
+        let of =
+            |t: &Option<ToolTable>| t.as_ref().and_then(|t| t.temperature).or(self.temperature);
+        ToolTemperatures {
+            punch: of(&self.punch),
+            die: of(&self.die),
+            holder: of(&self.holder),
+        }
+    }
+
     fn files(self, folder: &Path) -> Result<ToolFiles, String> {
         let built_in_keys = [
             ("half_length", self.half_length.is_some()),
@@ -830,19 +865,24 @@ impl ToolsTable {
                  tools are the surfaces of tools.punch, tools.die and tools.holder"
             ));
         }
-        let need = |key: &str, file: Option<ToolFile>| {
-            file.ok_or_else(|| {
+        let need =
+            |key: &str, table: Option<ToolTable>| {
+                table.and_then(|t| t.file.map(|file| (file, t.element_set))).ok_or_else(|| {
                 format!("tools.{key} = {{ file = \"...\" }} is needed with tools.shape = \"files\"")
             })
+            };
+        let at = |(file, element_set): (PathBuf, Option<String>)| ToolFile {
+            file: folder.join(file),
+            element_set,
         };
-        let at = |t: ToolFile| ToolFile {
-            file: folder.join(t.file),
-            ..t
+        let holder = match self.holder {
+            Some(h) if h.names_a_surface() => Some(at(need("holder", Some(h))?)),
+            _ => None,
         };
         Ok(ToolFiles {
             punch: at(need("punch", self.punch)?),
             die: at(need("die", self.die)?),
-            holder: self.holder.map(at),
+            holder,
             flange_radius: self.flange_radius,
         })
     }
@@ -852,8 +892,14 @@ impl ToolsTable {
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Process {
-    /// Isothermal forming temperature (°C).
+    /// Isothermal forming temperature (°C); in a non-isothermal run the blank's out of the
+    /// oven, `blank_temperature`.
+    #[serde(default = "unset")]
     pub temperature: f64,
+    /// Non-isothermal run: the blank out of the oven (°C), and its time in air before the
+    /// stroke (s); see [`Scenario::heat`].
+    pub blank_temperature: Option<f64>,
+    pub transfer_time: Option<f64>,
     /// Punch travel (mm) and physical punch speed (mm/s).
     pub stroke: f64,
     pub punch_speed: f64,
@@ -882,6 +928,11 @@ pub struct Process {
 
 fn one() -> f64 {
     1.0
+}
+
+/// A key not given: told apart from any value given.
+fn unset() -> f64 {
+    f64::NAN
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
@@ -945,8 +996,28 @@ struct ScenarioFile {
     boundary: Vec<Boundary>,
     tools: ToolsTable,
     process: Process,
+    thermal: Option<ThermalTable>,
     #[serde(default)]
     output: Output,
+}
+
+/// The temperature the run's once-evaluated tables are taken at: `process.temperature`, or in a
+/// non-isothermal run the blank's out of the oven; one of the two, not both.
+fn run_temperature(p: &Process) -> Result<f64, String> {
+    match (p.temperature.is_nan(), p.blank_temperature) {
+        (false, None) => Ok(p.temperature),
+        (true, Some(t)) => Ok(t),
+        (false, Some(_)) => Err(
+            "process.temperature (an isothermal run) and process.blank_temperature (a \
+             non-isothermal one) exclude each other: give one"
+                .into(),
+        ),
+        (true, None) => Err(
+            "process.temperature is needed: the forming temperature of an isothermal run (°C), \
+             or process.blank_temperature for a non-isothermal one"
+                .into(),
+        ),
+    }
 }
 
 /// Why a scenario cannot be used: the file and what is wrong (with the key or the line).
@@ -989,16 +1060,28 @@ impl Scenario {
             from_toml_value(toml::Value::Table(table))
                 .map_err(|e| error(format!("{e} (with --set {})", overrides.join(" --set "))))?
         };
+        let mut process = file.process;
+        process.temperature = run_temperature(&process).map_err(error)?;
+        let has_holder = process.blank_holder_force > 0.0 || process.blank_holder_gap.is_some();
+        let heat = heat_scenario(
+            process.blank_temperature,
+            process.transfer_time,
+            file.tools.temperatures(),
+            file.thermal,
+            has_holder,
+        )
+        .map_err(error)?;
         let scenario = Scenario {
             origin: origin.to_string(),
             blank: file
                 .blank
-                .resolve(folder, file.process.temperature)
+                .resolve(folder, process.temperature)
                 .map_err(error)?,
             boundary: file.boundary,
             tools: file.tools.resolve(folder).map_err(error)?,
-            process: file.process,
+            process,
             output: file.output,
+            heat,
         };
         scenario.check().map_err(error)?;
         Ok(scenario)

@@ -177,7 +177,17 @@ impl FormingModel {
             ToolSet::BuiltIn(t) => built_in_tool_set(s, t, (thickness, reach), punch, blank_mass)?,
             ToolSet::Files(f) => file_tool_set(s, f, (thickness, blank_mass), punch, &mut notes)?,
         };
-        let model = with_tools_on_the_outer_plies(model, tools);
+        let mut model = with_tools_on_the_outer_plies(model, tools);
+        if let Some(heat) = &s.heat {
+            let paths: Vec<&Path> = match &s.blank.layup {
+                Some(l) => l.plies.iter().map(|p| p.card.as_path()).collect(),
+                None => vec![s.blank.card.as_path()],
+            };
+            let with_paths: Vec<(&MaterialCard, &Path)> = cards.iter().zip(paths).collect();
+            let heat_model = super::heat::heat_model(s, heat, &with_paths, &model)
+                .map_err(|e| format!("{}: {e}", s.origin))?;
+            model = model.with_heat(heat_model);
+        }
         if let ToolSet::Files(_) = s.tools {
             check_start_positions(&model)?;
         }

@@ -6,6 +6,7 @@ use crate::material::fabric::shear_angle;
 use crate::material::laminate::Laminate;
 use crate::material::{MaterialError, MembraneKinematics};
 use crate::solver::{Model, State};
+use crate::thermal::{BlankHeat, ThermalState};
 use nalgebra::{Matrix2, Matrix3, Vector3};
 use std::sync::Arc;
 
@@ -79,7 +80,12 @@ pub fn sheet_frame(model: &Model, state: &State) -> Result<SheetFrame, MaterialE
     for (k, e) in model.elements.iter().enumerate() {
         let f = e.gradient(&state.positions);
         let f_dot = e.gradient(&state.velocities);
-        let kin = MembraneKinematics::from_deformation(&f, &f_dot, model.temperature, e.fibres);
+        let kin = MembraneKinematics::from_deformation(
+            &f,
+            &f_dot,
+            state.element_temperature(model, k),
+            e.fibres,
+        );
         let mut c3 = Matrix3::identity();
         c3.fixed_view_mut::<2, 2>(0, 0).copy_from(&kin.c);
         gamma.push(shear_angle(&c3, &e.fibres).to_degrees());
@@ -141,6 +147,11 @@ pub fn sheet_frame(model: &Model, state: &State) -> Result<SheetFrame, MaterialE
             });
         }
     }
+    if let (Some(heat), Some(thermal)) = (&model.heat, &state.thermal) {
+        let (points, cells) = thermal_fields(&heat.blank, thermal, model.elements.len());
+        point_data.extend(points);
+        cell_data.extend(cells);
+    }
     if model.plies.len() > 1 {
         cell_data.push(Field {
             name: "ply".into(),
@@ -156,6 +167,76 @@ pub fn sheet_frame(model: &Model, state: &State) -> Result<SheetFrame, MaterialE
         point_data,
         cell_data,
     })
+}
+
+/// The temperature field of a non-isothermal run (docs/model.md §9). Point data: the mean
+/// temperature through each node's column and those of its bottom and top faces' cells
+/// (`temperature`, `temperature_bottom`, `temperature_top`, °C). Cell data: each layer's
+/// temperature and relative crystallinity (`temperature_layer_<k>`, `crystallinity_layer_<k>`,
+/// layers from the bottom face, numbered from 1), the thickness-weighted mean temperature
+/// (`temperature`) and whether any layer has frozen (`frozen`, 1 or 0).
+fn thermal_fields(
+    heat: &BlankHeat,
+    thermal: &ThermalState,
+    elements: usize,
+) -> (Vec<Field>, Vec<Field>) {
+    let cells = thermal.cells;
+    let column = |a: usize| thermal.column(a);
+    let nodes = thermal.temperatures.len() / cells;
+    let mean = heat.node_mean_temperatures(thermal);
+    let bottom = (0..nodes).map(|a| column(a)[0]).collect();
+    let top = (0..nodes).map(|a| column(a)[cells - 1]).collect();
+    let points = vec![
+        scalar("temperature", mean),
+        scalar("temperature_bottom", bottom),
+        scalar("temperature_top", top),
+    ];
+    let layers = heat.layers();
+    let temperatures = heat.element_layer_temperatures(thermal);
+    let crystallinity = heat.element_layer_crystallinity(thermal);
+    let by_layer = |values: &[f64], l: usize| -> Vec<f64> {
+        (0..elements).map(|k| values[k * layers + l]).collect()
+    };
+    let mut cells_out = Vec::with_capacity(2 * layers + 2);
+    let weights = heat.layer_thickness_shares();
+    cells_out.push(scalar(
+        "temperature",
+        (0..elements)
+            .map(|k| {
+                (0..layers)
+                    .map(|l| weights[heat.ply_of_element(k)][l] * temperatures[k * layers + l])
+                    .sum()
+            })
+            .collect(),
+    ));
+    for l in 0..layers {
+        cells_out.push(scalar(
+            &format!("temperature_layer_{}", l + 1),
+            by_layer(&temperatures, l),
+        ));
+    }
+    for l in 0..layers {
+        cells_out.push(scalar(
+            &format!("crystallinity_layer_{}", l + 1),
+            by_layer(&crystallinity, l),
+        ));
+    }
+    let frozen = (0..elements)
+        .map(|k| {
+            let limit = heat.frozen_at(k).unwrap_or(f64::INFINITY);
+            let any = (0..layers).any(|l| crystallinity[k * layers + l] >= limit);
+            f64::from(u8::from(any))
+        })
+        .collect();
+    cells_out.push(scalar("frozen", frozen));
+    (points, cells_out)
+}
+
+fn scalar(name: &str, values: Vec<f64>) -> Field {
+    Field {
+        name: name.into(),
+        data: FieldData::Scalar(values),
+    }
 }
 
 /// The stress array's name of each layer: `stress_<material>` for the first layer of each

@@ -14,6 +14,7 @@ use crate::limits::{
     between, shown, shown_apart, Range, BENDING_RIGIDITY, COMPLIANCE, DENSITY, FRACTION,
     FRICTION_ONSET, SHEAR_ANGLE, STIFFNESS, TEMPERATURE, THICKNESS, VISCOSITY,
 };
+use crate::thermal::properties::{ThermalProperties, ThermalSection};
 use serde::Deserialize;
 use std::path::Path;
 use std::sync::Arc;
@@ -31,6 +32,9 @@ pub struct MaterialCard {
     /// Bending rigidity of the ply per unit width (docs/model.md §4), constant or a table in
     /// temperature; absent: a membrane.
     pub bending: Option<BendingCard>,
+    /// The ply's thermal properties (`[thermal]`, docs/model.md §9), which a non-isothermal
+    /// run needs; absent: the card serves isothermal runs only.
+    pub thermal: Option<ThermalProperties>,
 }
 
 /// The card's `[bending]`: rigidities per unit width (N·mm), constant or given at temperatures
@@ -82,6 +86,7 @@ struct CardFile {
     matrix: Option<MatrixSection>,
     fabric: FabricSection,
     bending: Option<BendingSection>,
+    thermal: Option<ThermalSection>,
 }
 
 /// `[bending]`: rigidities per unit width (N·mm) for curvature along warp and weft, as from
@@ -315,6 +320,7 @@ impl CardFile {
         let laminate = self.layers.check(matrix.clone(), fabric.clone())?;
         let bending = self.bending.map(BendingSection::check).transpose()?;
         check_tables_overlap(matrix.as_deref(), bending.as_ref())?;
+        let thermal = self.thermal.map(ThermalSection::check).transpose()?;
         Ok(MaterialCard {
             name: self.name,
             density: self.density,
@@ -322,6 +328,7 @@ impl CardFile {
             fabric,
             laminate,
             bending,
+            thermal,
         })
     }
 }

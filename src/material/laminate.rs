@@ -40,6 +40,59 @@ struct LayerSolution {
     s: Matrix3<f64>,
 }
 
+/// The most layers a laminate may have where each layer has its own temperature.
+pub const MAX_LAYERS: usize = 8;
+
+/// The temperature of each layer of the stack at one point (°C): one for the whole stack (an
+/// isothermal run), or each layer its own (a non-isothermal run, docs/model.md §9: a matrix
+/// skin on a cold tool is colder than the fabric under it).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LayerTemperatures {
+    values: [f64; MAX_LAYERS],
+    /// 0 for one temperature for every layer, `values[0]`.
+    len: usize,
+}
+
+impl LayerTemperatures {
+    /// Every layer at `temperature`.
+    pub fn uniform(temperature: f64) -> Self {
+        Self {
+            values: [temperature; MAX_LAYERS],
+            len: 0,
+        }
+    }
+
+    /// Layer `k` at `values[k]`; at most [`MAX_LAYERS`] layers (a longer list is an error).
+    pub fn per_layer(values: &[f64]) -> Result<Self, String> {
+        if values.is_empty() || values.len() > MAX_LAYERS {
+            return Err(format!(
+                "a temperature per layer needs 1 to {MAX_LAYERS} layers, not {}",
+                values.len()
+            ));
+        }
+        let mut all = [values[0]; MAX_LAYERS];
+        all[..values.len()].copy_from_slice(values);
+        Ok(Self {
+            values: all,
+            len: values.len(),
+        })
+    }
+
+    /// The temperature of layer `k`.
+    pub fn layer(&self, k: usize) -> f64 {
+        match self.len {
+            0 => self.values[0],
+            _ => self.values[k],
+        }
+    }
+}
+
+impl From<f64> for LayerTemperatures {
+    fn from(temperature: f64) -> Self {
+        Self::uniform(temperature)
+    }
+}
+
 /// In-plane kinematics of the sheet in an orthonormal local basis `(e1, e2)` of the reference
 /// tangent plane (docs/model.md §1).
 #[derive(Clone, Copy, Debug)]
@@ -48,8 +101,8 @@ pub struct MembraneKinematics {
     pub c: Matrix2<f64>,
     /// `C2dot = Fdot^T F + F^T Fdot` (2x2).
     pub c_dot: Matrix2<f64>,
-    /// Temperature, °C.
-    pub temperature: f64,
+    /// Temperature of each layer, °C.
+    pub temperature: LayerTemperatures,
     /// Warp and weft in the local basis (third components zero).
     pub fibres: FibreDirections,
 }
@@ -60,19 +113,20 @@ impl MembraneKinematics {
     pub fn from_deformation(
         f: &Matrix3x2<f64>,
         f_dot: &Matrix3x2<f64>,
-        temperature: f64,
+        temperature: impl Into<LayerTemperatures>,
         fibres: FibreDirections,
     ) -> Self {
         Self {
             c: f.transpose() * f,
             c_dot: f_dot.transpose() * f + f.transpose() * f_dot,
-            temperature,
+            temperature: temperature.into(),
             fibres,
         }
     }
 
-    /// A layer's 3D kinematics, `C = diag-block(C2, lambda3^2)` (docs/model.md §1).
-    pub fn layer_point(&self, lambda3: f64, lambda3_rate: f64) -> PointKinematics {
+    /// Layer `k`'s 3D kinematics, `C = diag-block(C2, lambda3^2)` (docs/model.md §1), at its
+    /// temperature.
+    pub fn layer_point(&self, k: usize, lambda3: f64, lambda3_rate: f64) -> PointKinematics {
         let mut c = Matrix3::zeros();
         let mut c_dot = Matrix3::zeros();
         c.fixed_view_mut::<2, 2>(0, 0).copy_from(&self.c);
@@ -82,7 +136,7 @@ impl MembraneKinematics {
         PointKinematics {
             c,
             c_dot,
-            temperature: self.temperature,
+            temperature: self.temperature.layer(k),
             fibres: self.fibres,
         }
     }
@@ -95,7 +149,7 @@ pub struct BackwardEulerStep {
     pub c: Matrix2<f64>,
     pub c_start: Matrix2<f64>,
     pub dt: f64,
-    pub temperature: f64,
+    pub temperature: LayerTemperatures,
     pub fibres: FibreDirections,
 }
 
@@ -246,7 +300,9 @@ impl Laminate {
         let shared = self.solve_layer(group[0], kin, previous, dt)?;
         for &k in group {
             let own;
-            let solution = if state.thickness_stretch[k] == previous {
+            let solution = if state.thickness_stretch[k] == previous
+                && kin.temperature.layer(k) == kin.temperature.layer(group[0])
+            {
                 &shared
             } else {
                 own = self.solve_layer(k, kin, state.thickness_stretch[k], dt)?;
@@ -311,10 +367,7 @@ impl Laminate {
         let mut d = Matrix3::zeros();
         let mut last: Option<(usize, Matrix3<f64>)> = None;
         for &k in group {
-            let shares_state = |j: usize| {
-                state.thickness_stretch[j] == state.thickness_stretch[k]
-                    && state.thickness_stretch_rate[j] == state.thickness_stretch_rate[k]
-            };
+            let shares_state = |j: usize| shares_point(kin, state, j, k);
             let tangent = match last.filter(|(j, _)| shares_state(*j)) {
                 Some((_, tangent)) => tangent,
                 None => match self.layer_tangent(k, kin, dt, state)? {
@@ -344,7 +397,7 @@ impl Laminate {
         state: &LaminateState,
     ) -> Result<Option<Matrix3<f64>>, MaterialError> {
         let (lambda3, rate) = (state.thickness_stretch[k], state.thickness_stretch_rate[k]);
-        let point = kin.layer_point(lambda3, rate);
+        let point = kin.layer_point(k, lambda3, rate);
         let per_second = if dt > 0.0 { dt.recip() } else { 0.0 };
         let in_plane = |c2: Matrix2<f64>| {
             let mut dc = Matrix3::zeros();
@@ -437,7 +490,9 @@ impl Laminate {
         kin: &MembraneKinematics,
         state: &LaminateState,
     ) -> Result<f64, MaterialError> {
-        self.thickness_mean(kin, state, |law, point| law.wave_modulus(point))
+        let [wave] =
+            self.thickness_mean(kin, state, |law, point| Ok([law.wave_modulus(point)?]))?;
+        Ok(wave)
     }
 
     /// Thickness-weighted mean of the layers' viscous moduli (MPa·s) in an advanced state:
@@ -447,7 +502,9 @@ impl Laminate {
         kin: &MembraneKinematics,
         state: &LaminateState,
     ) -> Result<f64, MaterialError> {
-        self.thickness_mean(kin, state, |law, point| law.viscous_modulus(point))
+        let [viscous] =
+            self.thickness_mean(kin, state, |law, point| Ok([law.viscous_modulus(point)?]))?;
+        Ok(viscous)
     }
 
     /// [`Self::wave_modulus`] and [`Self::viscous_modulus`] in one pass over the layers, the
@@ -457,50 +514,44 @@ impl Laminate {
         kin: &MembraneKinematics,
         state: &LaminateState,
     ) -> Result<StepModuli, MaterialError> {
-        let weighted = self
-            .groups
-            .iter()
-            .try_fold(StepModuli::default(), |sum, group| {
-                let (thickness, point) = self.group_point(group, kin, state);
-                let moduli = self.layers[group[0]].law.step_moduli(&point)?;
-                Ok(StepModuli {
-                    wave: sum.wave + thickness * moduli.wave,
-                    viscous: sum.viscous + thickness * moduli.viscous,
-                })
-            })?;
-        let t0 = self.reference_thickness();
-        Ok(StepModuli {
-            wave: weighted.wave / t0,
-            viscous: weighted.viscous / t0,
-        })
-    }
-
-    /// `sum_k t_k f(law_k, point_k) / t0`, each law evaluated once per group of layers.
-    fn thickness_mean(
-        &self,
-        kin: &MembraneKinematics,
-        state: &LaminateState,
-        f: impl Fn(&dyn MaterialLaw, &PointKinematics) -> Result<f64, MaterialError>,
-    ) -> Result<f64, MaterialError> {
-        let weighted = self.groups.iter().try_fold(0.0, |sum, group| {
-            let (thickness, point) = self.group_point(group, kin, state);
-            Ok(sum + thickness * f(self.layers[group[0]].law.as_ref(), &point)?)
+        let [wave, viscous] = self.thickness_mean(kin, state, |law, point| {
+            let moduli = law.step_moduli(point)?;
+            Ok([moduli.wave, moduli.viscous])
         })?;
-        Ok(weighted / self.reference_thickness())
+        Ok(StepModuli { wave, viscous })
     }
 
-    /// A group's total thickness and the kinematics of its first layer, which all its layers
-    /// share in an advanced state.
-    fn group_point(
+    /// `sum_k t_k f(law_k, point_k) / t0`, evaluated once for the layers of a group that share
+    /// their state and temperature.
+    fn thickness_mean<const N: usize>(
         &self,
-        group: &[usize],
         kin: &MembraneKinematics,
         state: &LaminateState,
-    ) -> (f64, PointKinematics) {
-        let k = group[0];
-        let point = kin.layer_point(state.thickness_stretch[k], state.thickness_stretch_rate[k]);
-        let thickness: f64 = group.iter().map(|&j| self.layers[j].thickness).sum();
-        (thickness, point)
+        f: impl Fn(&dyn MaterialLaw, &PointKinematics) -> Result<[f64; N], MaterialError>,
+    ) -> Result<[f64; N], MaterialError> {
+        let mut sum = [0.0; N];
+        for group in &self.groups {
+            let mut last: Option<(usize, [f64; N])> = None;
+            for &k in group {
+                let value = match last.filter(|(j, _)| shares_point(kin, state, *j, k)) {
+                    Some((_, value)) => value,
+                    None => {
+                        let point = kin.layer_point(
+                            k,
+                            state.thickness_stretch[k],
+                            state.thickness_stretch_rate[k],
+                        );
+                        f(self.layers[k].law.as_ref(), &point)?
+                    }
+                };
+                for (s, v) in sum.iter_mut().zip(value) {
+                    *s += self.layers[k].thickness * v;
+                }
+                last = Some((k, value));
+            }
+        }
+        let t0 = self.reference_thickness();
+        Ok(sum.map(|s| s / t0))
     }
 
     /// Initial in-plane shear modulus (MPa) in the frame of the yarns: the secant of a simple
@@ -562,8 +613,11 @@ impl Laminate {
     ) -> Result<[f64; 2], MaterialError> {
         let mut sum = [0.0; 2];
         for (k, layer) in self.layers.iter().enumerate() {
-            let point =
-                kin.layer_point(state.thickness_stretch[k], state.thickness_stretch_rate[k]);
+            let point = kin.layer_point(
+                k,
+                state.thickness_stretch[k],
+                state.thickness_stretch_rate[k],
+            );
             if let Some(t) = layer.law.yarn_tensions(&point)? {
                 sum[0] += layer.thickness * t[0];
                 sum[1] += layer.thickness * t[1];
@@ -578,7 +632,11 @@ impl Laminate {
         kin: &MembraneKinematics,
         state: &LaminateState,
     ) -> Result<Matrix3<f64>, MaterialError> {
-        let point = kin.layer_point(state.thickness_stretch[k], state.thickness_stretch_rate[k]);
+        let point = kin.layer_point(
+            k,
+            state.thickness_stretch[k],
+            state.thickness_stretch_rate[k],
+        );
         self.layers[k].law.second_piola_kirchhoff(&point)
     }
 
@@ -616,8 +674,11 @@ impl Laminate {
             .iter()
             .enumerate()
             .try_fold(0.0, |sum, (k, layer)| {
-                let point =
-                    kin.layer_point(state.thickness_stretch[k], state.thickness_stretch_rate[k]);
+                let point = kin.layer_point(
+                    k,
+                    state.thickness_stretch[k],
+                    state.thickness_stretch_rate[k],
+                );
                 Ok(sum + layer.thickness * f(layer.law.as_ref(), &point)?)
             })
     }
@@ -637,7 +698,7 @@ impl Laminate {
         let law = &self.layers[k].law;
         let stress_at = |lambda3: f64| {
             let rate = thickness_rate(lambda3, previous, dt);
-            let s = law.second_piola_kirchhoff(&kin.layer_point(lambda3, rate))?;
+            let s = law.second_piola_kirchhoff(&kin.layer_point(k, lambda3, rate))?;
             Ok(LayerSolution { lambda3, rate, s })
         };
         match law.thickness_rule() {
@@ -649,7 +710,7 @@ impl Laminate {
                     // The slope probe reads `S33` alone, which the law may compute cheaply.
                     Evaluation::SlopeProbe => {
                         let rate = thickness_rate(lambda3, previous, dt);
-                        let point = kin.layer_point(lambda3, rate);
+                        let point = kin.layer_point(k, lambda3, rate);
                         let sample = StressSample {
                             value: law.through_thickness_stress(&point)?,
                             scale: f64::NAN,
@@ -660,7 +721,7 @@ impl Laminate {
                     Evaluation::Residual => {
                         let rate = thickness_rate(lambda3, previous, dt);
                         let (s, tangent) = law.stress_with_through_thickness_tangent(
-                            &kin.layer_point(lambda3, rate),
+                            &kin.layer_point(k, lambda3, rate),
                         )?;
                         let sample = StressSample {
                             value: s[(2, 2)],
@@ -687,6 +748,14 @@ impl Laminate {
             }
         }
     }
+}
+
+/// Whether layers `j` and `k` are at the same point: the same thickness stretch, rate and
+/// temperature (layers of one law then have the same stress).
+fn shares_point(kin: &MembraneKinematics, state: &LaminateState, j: usize, k: usize) -> bool {
+    state.thickness_stretch[j] == state.thickness_stretch[k]
+        && state.thickness_stretch_rate[j] == state.thickness_stretch_rate[k]
+        && kin.temperature.layer(j) == kin.temperature.layer(k)
 }
 
 /// `dS33/dlambda3` along the layer's path: `C33 = lambda3^2` and, with the backward-difference

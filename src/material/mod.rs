@@ -15,7 +15,9 @@ pub mod temperature_table;
 
 pub use card::MaterialCard;
 pub use fabric::WovenFabric;
-pub use laminate::{Laminate, LaminateState, Layer, MembraneKinematics, MembraneResponse};
+pub use laminate::{
+    Laminate, LaminateState, Layer, LayerTemperatures, MembraneKinematics, MembraneResponse,
+};
 pub use matrix::ViscoHyperelasticMatrix;
 pub use stress_free_stretch::Evaluation;
 pub use temperature_table::TemperatureTable;

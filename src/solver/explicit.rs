@@ -12,6 +12,7 @@
 use super::checks::{self, CheckReport, CheckSettings};
 use super::energy::Energies;
 use super::error::{positive_setting, SolverError};
+use super::heat;
 use super::model::{Model, Motion};
 use super::observer::Observer;
 use super::state::State;
@@ -131,6 +132,8 @@ pub fn run(
     let mut forces = InternalForces::new(model);
     let prescribed = prescribed_motion(model);
     let mut state = initial_state(model, settings)?;
+    heat::start(model, &mut state)?;
+    let mut heat_pending = 0.0;
     let zeros = vec![Vector3::zeros(); model.mesh.nodes.len()];
     let mut ply_contact = model.ply_contact(EXPLICIT_PLY_MARGIN);
     let mut previous = PreviousStep {
@@ -185,6 +188,11 @@ pub fn run(
         if last {
             return Ok(state);
         }
+        heat_pending += dt;
+        if heat_is_due(model, heat_pending, state.time + dt >= settings.end_time) {
+            heat::advance(model, &mut state, heat_pending)?;
+            heat_pending = 0.0;
+        }
         state.energies.numerical_damping += damping_power * dt;
         advance(
             model,
@@ -233,6 +241,16 @@ pub fn run(
             observer.progress(&state);
         }
     }
+}
+
+/// Whether the heat equation is advanced now, `pending` seconds of the solver's time after it
+/// last was: every step would cost more than the mechanics' step, so the contacts are sampled
+/// once per [`crate::thermal::blank::HeatSettings::time_step`] of process time, and at the end.
+fn heat_is_due(model: &Model, pending: f64, at_end: bool) -> bool {
+    model
+        .heat
+        .as_ref()
+        .is_some_and(|heat| at_end || pending * heat.time_scaling >= heat.blank.settings.time_step)
 }
 
 /// Step `n -> n+1` of every node: velocity (free, or prescribed at `t_{n+1/2}`), reaction,
@@ -518,8 +536,9 @@ fn bending_loop(
         .zip(state.densities.par_iter())
         .enumerate()
         .map(|(k, ((f, t), rho))| {
-            bending.forces(t, &state.positions, f);
-            bending.stable_step(t, rho * model.thickness(k))
+            let b = state.bending_rigidity(t, k);
+            bending.forces_with(t, b, &state.positions, f);
+            bending.stable_step_with(t, b, rho * model.thickness(k))
         })
         .reduce(|| f64::INFINITY, f64::min)
 }
@@ -607,6 +626,7 @@ fn element_loop(
     let positions = &state.positions;
     let velocities = &state.velocities;
     let densities = &state.densities;
+    let temperatures = &state.temperatures;
     let chunks: Vec<Result<(f64, f64), (usize, MaterialError)>> = results
         .par_chunks_mut(CHUNK)
         .zip(state.laminate_states.par_chunks_mut(CHUNK))
@@ -622,8 +642,8 @@ fn element_loop(
                 let (laminate, thickness) = (&ply.laminate, ply.laminate.reference_thickness());
                 let f = e.gradient(positions);
                 let f_dot = e.gradient(velocities);
-                let kin =
-                    MembraneKinematics::from_deformation(&f, &f_dot, model.temperature, e.fibres);
+                let temperature = model.element_temperature(temperatures, k);
+                let kin = MembraneKinematics::from_deformation(&f, &f_dot, temperature, e.fibres);
                 let response = laminate
                     .membrane_response(&kin, dt, lam_state)
                     .map_err(|err| (k, err))?;

@@ -10,6 +10,7 @@ pub mod energy;
 pub mod error;
 pub mod estimate;
 pub mod explicit;
+pub mod heat;
 pub mod implicit;
 pub mod model;
 pub mod observer;

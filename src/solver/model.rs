@@ -3,13 +3,16 @@
 //! so that the solvers, the tangent and the writers see one set of nodes; each ply knows its
 //! ranges.
 
+use super::heat::HeatModel;
 use crate::contact::ply_contact::{PlyContact, PlyInterface, PlySurface};
 use crate::contact::{ContactSettings, RigidTool};
 use crate::element::bending::BendingError;
 use crate::element::membrane::ElementError;
 use crate::element::membrane::HourglassModuli;
 use crate::element::{Bending, BendingRigidity, MembraneElement};
-use crate::material::{FibreDirections, Laminate, MaterialError, MembraneKinematics};
+use crate::material::{
+    FibreDirections, Laminate, LayerTemperatures, MaterialError, MembraneKinematics,
+};
 use crate::mesh::{Mesh, MeshError};
 use nalgebra::{Matrix2, Vector3};
 use std::ops::Range;
@@ -100,9 +103,12 @@ pub struct Model {
     pub interfaces: Vec<PlyInterface>,
     /// The ply of each element.
     element_ply: Vec<usize>,
-    /// Isothermal temperature of the run (°C).
+    /// Isothermal temperature of the run (°C); in a non-isothermal run, the blank's out of the
+    /// oven, at which what is not evaluated at the local temperature is taken.
     pub temperature: f64,
     pub constraints: Vec<Constraint>,
+    /// The heat problem of a non-isothermal run (docs/model.md §9); `None`: isothermal.
+    pub heat: Option<HeatModel>,
 }
 
 /// Why a model cannot be built.
@@ -159,7 +165,7 @@ impl Model {
         MembraneKinematics {
             c: Matrix2::identity(),
             c_dot: Matrix2::zeros(),
-            temperature: self.temperature,
+            temperature: self.temperature.into(),
             fibres: self.elements[k].fibres,
         }
     }
@@ -254,7 +260,27 @@ impl Model {
             element_ply,
             temperature,
             constraints,
+            heat: None,
         })
+    }
+
+    /// The temperature of each layer of element `k` (°C) in a field of per-element
+    /// `temperatures`; the model's own where the field is empty (an isothermal run).
+    pub fn element_temperature(
+        &self,
+        temperatures: &[LayerTemperatures],
+        k: usize,
+    ) -> LayerTemperatures {
+        temperatures
+            .get(k)
+            .copied()
+            .unwrap_or_else(|| self.temperature.into())
+    }
+
+    /// The same blank with a temperature field: a non-isothermal run.
+    pub fn with_heat(mut self, heat: HeatModel) -> Self {
+        self.heat = Some(heat);
+        self
     }
 
     /// The ply element `k` belongs to.
@@ -444,7 +470,7 @@ pub(crate) fn rest_moduli(
     let rest = MembraneKinematics {
         c: nalgebra::Matrix2::identity(),
         c_dot: nalgebra::Matrix2::zeros(),
-        temperature,
+        temperature: temperature.into(),
         fibres: FibreDirections::default(),
     };
     Ok(HourglassModuli {

@@ -6,7 +6,11 @@ use super::energy::Energies;
 use super::model::Model;
 use crate::contact::penalty::{NodeContact, ToolLoad};
 use crate::contact::ply_contact::InterplyNode;
-use crate::material::{LaminateState, MaterialError, MembraneKinematics, MembraneResponse};
+use crate::element::bending::{BendingPatch, BendingRigidity};
+use crate::material::{
+    LaminateState, LayerTemperatures, MaterialError, MembraneKinematics, MembraneResponse,
+};
+use crate::thermal::ThermalState;
 use nalgebra::{Matrix2, Vector3};
 use rayon::prelude::*;
 
@@ -51,6 +55,14 @@ pub struct State {
     pub contacts: Vec<NodeContact>,
     /// Contact of each node with the plies next to its own; empty without interfaces.
     pub interply: Vec<InterplyNode>,
+    /// The temperature field of the blank (docs/model.md §9); `None` in an isothermal run.
+    pub thermal: Option<ThermalState>,
+    /// The temperature of each layer of each element, from [`Self::thermal`]; empty in an
+    /// isothermal run, where every layer is at the model's temperature.
+    pub temperatures: Vec<LayerTemperatures>,
+    /// The bending rigidity of each element at its temperature; empty in an isothermal run,
+    /// where each bending patch's own holds.
+    pub bending_rigidities: Vec<BendingRigidity>,
 }
 
 impl State {
@@ -95,7 +107,24 @@ impl State {
                 true => Vec::new(),
                 false => vec![InterplyNode::default(); n_nodes],
             },
+            thermal: None,
+            temperatures: Vec::new(),
+            bending_rigidities: Vec::new(),
         }
+    }
+
+    /// The bending rigidity of patch `k` now: its own, or the one at its temperature.
+    pub fn bending_rigidity<'a>(
+        &'a self,
+        patch: &'a BendingPatch,
+        k: usize,
+    ) -> &'a BendingRigidity {
+        self.bending_rigidities.get(k).unwrap_or(&patch.rigidity)
+    }
+
+    /// The temperature of each layer of element `k` (°C).
+    pub fn element_temperature(&self, model: &Model, k: usize) -> LayerTemperatures {
+        model.element_temperature(&self.temperatures, k)
     }
 
     /// Elastic energy stored in the sheet, `sum_e A0 sum_k t_k W_k` plus the hinges' bending
@@ -109,8 +138,8 @@ impl State {
             .map(|(k, e)| {
                 let f = e.gradient(&self.positions);
                 let f_dot = e.gradient(&self.velocities);
-                let kin =
-                    MembraneKinematics::from_deformation(&f, &f_dot, model.temperature, e.fibres);
+                let temperature = self.element_temperature(model, k);
+                let kin = MembraneKinematics::from_deformation(&f, &f_dot, temperature, e.fibres);
                 let w = model
                     .laminate(k)
                     .stored_energy(&kin, &self.laminate_states[k])
@@ -123,7 +152,8 @@ impl State {
             let energies: Vec<f64> = b
                 .patches
                 .par_iter()
-                .map(|t| b.energy(t, &self.positions))
+                .enumerate()
+                .map(|(k, t)| b.energy_with(t, self.bending_rigidity(t, k), &self.positions))
                 .collect();
             energies.iter().sum()
         });

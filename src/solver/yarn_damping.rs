@@ -56,7 +56,7 @@ mod tests {
         MembraneKinematics {
             c: Matrix2::identity(),
             c_dot,
-            temperature: 20.0,
+            temperature: 20.0.into(),
             fibres: FibreDirections::in_plane(0.3),
         }
     }

@@ -16,8 +16,9 @@ use crate::contact::potential::{
 };
 use crate::contact::Projection;
 use crate::contact::{NearTriangles, NodeContact, ToolLoad, ToolMotion};
+use crate::element::bending::{BendingPatch, BendingRigidity};
 use crate::material::laminate::BackwardEulerStep;
-use crate::material::{LaminateState, MaterialError, MembraneResponse};
+use crate::material::{LaminateState, LayerTemperatures, MaterialError, MembraneResponse};
 use crate::solver::model::{Model, Motion};
 use nalgebra::{DMatrix, Matrix2, Matrix3, Matrix3x2, SymmetricEigen, Vector3};
 use rayon::prelude::*;
@@ -285,6 +286,20 @@ pub struct IncrementStart<'a> {
     pub ply_lists: &'a [InterplyNode],
     /// The triangle each node's ply–ply pairs are held on ([`super::interply::HeldFaces`]).
     pub ply_faces: &'a [[Option<HeldFace>; 2]],
+    /// The temperature of each layer of each element over the increment (the state's at its
+    /// start: the heat equation is advanced after the mechanics, docs/solver.md); empty in an
+    /// isothermal run.
+    pub temperatures: &'a [LayerTemperatures],
+    /// The bending rigidity of each element at its temperature over the increment; empty where
+    /// the patches' own hold (an isothermal run).
+    pub bending_rigidities: &'a [BendingRigidity],
+}
+
+impl IncrementStart<'_> {
+    /// The bending rigidity of patch `k` over the increment.
+    fn bending_rigidity<'p>(&'p self, patch: &'p BendingPatch, k: usize) -> &'p BendingRigidity {
+        self.bending_rigidities.get(k).unwrap_or(&patch.rigidity)
+    }
 }
 
 /// How the tangent is formed.
@@ -488,9 +503,11 @@ impl Evaluator<'_> {
             for (c, chunk) in bending.patches.chunks(CHUNK).enumerate() {
                 let shares: Vec<(Vec<Vector3<f64>>, f64)> = chunk
                     .par_iter()
-                    .map(|patch| {
+                    .enumerate()
+                    .map(|(i, patch)| {
+                        let b = start.bending_rigidity(patch, c * CHUNK + i);
                         let mut f = vec![Vector3::zeros(); patch.nodes.len()];
-                        let energy = bending.forces(patch, trial.positions, &mut f);
+                        let energy = bending.forces_with(patch, b, trial.positions, &mut f);
                         (f, energy)
                     })
                     .collect();
@@ -597,7 +614,11 @@ impl Evaluator<'_> {
             for (c, chunk) in bending.patches.chunks(CHUNK).enumerate() {
                 let blocks: Vec<DMatrix<f64>> = chunk
                     .par_iter()
-                    .map(|patch| bending.stiffness(patch, trial.positions, exact))
+                    .enumerate()
+                    .map(|(i, patch)| {
+                        let b = start.bending_rigidity(patch, c * CHUNK + i);
+                        bending.stiffness_with(patch, b, trial.positions, exact)
+                    })
                     .collect();
                 let groups = &layout.patches[c * CHUNK..];
                 layout.add_side_by_side(groups, &blocks, values, |k, a, b| {
@@ -660,7 +681,7 @@ impl Evaluator<'_> {
             c: f.transpose() * f,
             c_start: start.strains[k],
             dt: start.dt,
-            temperature: self.model.temperature,
+            temperature: self.model.element_temperature(start.temperatures, k),
             fibres: e.fibres,
         }
     }
@@ -761,6 +782,7 @@ impl Evaluator<'_> {
             let contact = &mut out.contacts[n];
             contact.tangential = vec![Vector3::zeros(); tools];
             contact.normal_force = vec![0.0; tools];
+            contact.normals = vec![Vector3::zeros(); tools];
             contact.near = vec![Default::default(); tools];
             for (k, (nearest, pair)) in node_pairs.into_iter().enumerate() {
                 out.nearest.push(nearest);
@@ -771,6 +793,7 @@ impl Evaluator<'_> {
                 contact.force += force;
                 contact.tangential[k] = pair.tangential;
                 contact.normal_force[k] = pair.normal_force;
+                contact.normals[k] = pair.normal;
                 let load = &mut out.loads[k];
                 if pair.normal_force > 0.0 {
                     load.normal_force += pair.normal_force;

@@ -27,6 +27,7 @@ mod supernodal;
 
 use super::energy::Energies;
 use super::error::{positive_setting, SolverError};
+use super::heat;
 use super::model::{rest_moduli, Model, Motion, Ply};
 use super::observer::Observer;
 use super::state::State;
@@ -259,6 +260,7 @@ pub fn run(
     check_settings(settings)?;
     let mut plies = model.ply_contact(IMPLICIT_PLY_MARGIN);
     let mut state = rest_state(model);
+    heat::start(model, &mut state)?;
     let couplings = relist_plies(plies.as_mut(), &mut state, true);
     let mut layout = layout(model, settings, &couplings)?;
     let mut work = Workspace::new(model, &layout, settings)?;
@@ -327,6 +329,7 @@ pub fn run(
                     (evaluation, positions, translations),
                     step,
                 );
+                heat::advance(model, &mut state, step)?;
                 stats.increments += 1;
                 state.step = stats.increments;
                 let reached_output = state.time >= next_output - 1e-9 * settings.output_interval;
@@ -460,6 +463,8 @@ pub fn residual_and_tangent(
         ply_lags: &no_ply_friction,
         ply_lists: &rest.interply,
         ply_faces: &faces,
+        temperatures: &rest.temperatures,
+        bending_rigidities: &rest.bending_rigidities,
     };
     let trial = Trial {
         positions,

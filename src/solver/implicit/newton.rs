@@ -174,6 +174,8 @@ impl Iterate {
             ply_lags: &self.ply_lags,
             ply_lists: &state.interply,
             ply_faces: &self.ply_faces,
+            temperatures: &state.temperatures,
+            bending_rigidities: &state.bending_rigidities,
         }
     }
 

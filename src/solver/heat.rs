@@ -1,0 +1,259 @@
+//! The heat equation of a non-isothermal run, advanced by both solvers after their mechanics
+//! (docs/model.md §9, docs/solver.md "Non-isothermal runs"): what the blank's temperature field
+//! sees of the state (the sheet's shape, its yarns and thickness, which face touches which
+//! tool and how hard, the friction work), and the temperature of each layer of each element
+//! that the laminate is then evaluated at.
+
+use super::error::SolverError;
+use super::model::Model;
+use super::state::State;
+use crate::element::bending::BendingRigidity;
+use crate::material::card::BendingCard;
+use crate::material::LayerTemperatures;
+use crate::thermal::blank::{BlankHeat, Face, HeatError, SheetNow};
+use nalgebra::Vector3;
+
+/// The heat problem of a run and its process: where the blank starts.
+#[derive(Clone, Debug)]
+pub struct HeatModel {
+    pub blank: BlankHeat,
+    /// Temperature of the blank out of the oven (°C).
+    pub blank_temperature: f64,
+    /// Time in air between the oven and the stroke (s).
+    pub transfer_time: f64,
+    /// How many times faster than the process the solver runs (the explicit solver's time
+    /// scaling): the heat equation runs in process time.
+    pub time_scaling: f64,
+    /// Each ply's bending rigidity table (its card's `[bending]`), evaluated at each element's
+    /// temperature; `None` for a ply without bending.
+    pub bending: Vec<Option<BendingCard>>,
+}
+
+/// The blank out of the oven and carried through the air for the transfer time, at rest on no
+/// tool: the state's temperature field and its layers' temperatures. Nothing in an isothermal
+/// run.
+pub fn start(model: &Model, state: &mut State) -> Result<(), SolverError> {
+    let Some(heat) = &model.heat else {
+        return Ok(());
+    };
+    let mut thermal = heat.blank.uniform(heat.blank_temperature);
+    let sheet = Sheet::at_rest(model, state);
+    heat.blank
+        .advance(&mut thermal, &sheet.view(), heat.transfer_time)
+        .map_err(|e| heat_failure(state, model, e, "in the transfer from the oven"))?;
+    state.thermal = Some(thermal);
+    update_layer_temperatures(model, state)
+}
+
+/// Advances the temperature field over a step of `dt` of the solver's time (the heat
+/// equation's is `dt` times the time scaling), with the contacts and the shape of the state.
+pub fn advance(model: &Model, state: &mut State, dt: f64) -> Result<(), SolverError> {
+    let Some(heat) = &model.heat else {
+        return Ok(());
+    };
+    let Some(mut thermal) = state.thermal.take() else {
+        return Ok(());
+    };
+    let sheet = Sheet::of(model, state);
+    let outcome = heat
+        .blank
+        .advance(&mut thermal, &sheet.view(), dt * heat.time_scaling);
+    state.thermal = Some(thermal);
+    outcome.map_err(|e| heat_failure(state, model, e, "in the stroke"))?;
+    update_layer_temperatures(model, state)
+}
+
+/// The state's per-element layer temperatures from its field, and the bending rigidity of each
+/// element at its mean temperature (docs/model.md §9): a temperature outside the bending table
+/// stops the run, naming the element.
+fn update_layer_temperatures(model: &Model, state: &mut State) -> Result<(), SolverError> {
+    let (Some(heat), Some(thermal)) = (&model.heat, &state.thermal) else {
+        return Ok(());
+    };
+    let layers = heat.blank.layers();
+    let means = heat.blank.element_layer_temperatures(thermal);
+    state.temperatures = means
+        .chunks(layers)
+        .map(|t| LayerTemperatures::per_layer(t).unwrap_or_else(|_| t[0].into()))
+        .collect();
+    if model.bending.is_none() {
+        return Ok(());
+    }
+    let shares = heat.blank.layer_thickness_shares();
+    let mut rigidities = Vec::with_capacity(model.elements.len());
+    for (k, t) in means.chunks(layers).enumerate() {
+        let p = model.ply_index(k);
+        let Some(table) = &heat.bending[p] else {
+            rigidities.push(BendingRigidity {
+                warp: 0.0,
+                weft: 0.0,
+            });
+            continue;
+        };
+        let mean: f64 = t.iter().zip(&shares[p]).map(|(t, w)| t * w).sum();
+        match table.at(mean) {
+            Ok(r) => rigidities.push(r),
+            Err(e) => {
+                let element = k;
+                return Err(SolverError::Unstable {
+                    step: state.step,
+                    time: state.time,
+                    element,
+                    reason: format!("bending rigidity at the element's temperature: {e}"),
+                    kinetic: state.energies.kinetic,
+                    internal: state.energies.internal_work,
+                    external: state.energies.external_work,
+                });
+            }
+        }
+    }
+    state.bending_rigidities = rigidities;
+    Ok(())
+}
+
+/// A failure of the heat equation as the solvers report one: the element is one of the node's.
+fn heat_failure(state: &State, model: &Model, error: HeatError, when: &str) -> SolverError {
+    let element = model
+        .elements
+        .iter()
+        .position(|e| e.nodes().contains(&error.node))
+        .unwrap_or(0);
+    SolverError::Unstable {
+        step: state.step,
+        time: state.time,
+        element,
+        reason: format!(
+            "the blank's temperature {when}, at node {}: {}",
+            error.node, error.reason
+        ),
+        kinetic: state.energies.kinetic,
+        internal: state.energies.internal_work,
+        external: state.energies.external_work,
+    }
+}
+
+/// What the heat equation reads of a state, gathered once per step.
+struct Sheet<'a> {
+    positions: &'a [Vector3<f64>],
+    yarns: Vec<(Vector3<f64>, Vector3<f64>)>,
+    stretch: Vec<f64>,
+    faces: Vec<[Face; 2]>,
+    friction_power: Vec<f64>,
+}
+
+impl<'a> Sheet<'a> {
+    /// The blank as it is in `state`, its faces on the tools it touches.
+    fn of(model: &Model, state: &'a State) -> Self {
+        let normals = node_normals(model, &state.positions);
+        let areas = model.nodal_areas();
+        let faces = state
+            .contacts
+            .iter()
+            .zip(&normals)
+            .zip(&areas)
+            .map(|((contact, n), area)| {
+                let mut faces = [Face::Air; 2];
+                for (tool, (&fn_k, normal)) in contact
+                    .normal_force
+                    .iter()
+                    .zip(&contact.normals)
+                    .enumerate()
+                {
+                    if fn_k > 0.0 {
+                        // the tool pushes the node away from itself: from below the shell's
+                        // normal it touches the bottom face
+                        let side = if normal.dot(n) > 0.0 { 0 } else { 1 };
+                        faces[side] = Face::Tool {
+                            tool,
+                            pressure: fn_k / area,
+                        };
+                    }
+                }
+                faces
+            })
+            .collect();
+        let friction_power = state
+            .contacts
+            .iter()
+            .zip(&state.velocities)
+            .map(|(contact, v)| {
+                contact
+                    .tangential
+                    .iter()
+                    .zip(&state.tool_velocities)
+                    .map(|(f, v_tool)| f.dot(&(v - v_tool)).abs())
+                    .sum()
+            })
+            .collect();
+        Self {
+            positions: &state.positions,
+            yarns: yarns(model, &state.positions),
+            stretch: stretches(model, state),
+            faces,
+            friction_power,
+        }
+    }
+
+    /// The blank at rest in the air.
+    fn at_rest(model: &Model, state: &'a State) -> Self {
+        let nodes = state.positions.len();
+        Self {
+            positions: &state.positions,
+            yarns: yarns(model, &state.positions),
+            stretch: stretches(model, state),
+            faces: vec![[Face::Air; 2]; nodes],
+            friction_power: vec![0.0; nodes],
+        }
+    }
+
+    fn view(&self) -> SheetNow<'_> {
+        SheetNow {
+            positions: self.positions,
+            yarns: &self.yarns,
+            stretch: &self.stretch,
+            faces: &self.faces,
+            ply_exchanges: &[],
+            friction_power: &self.friction_power,
+        }
+    }
+}
+
+/// Current warp and weft of each element, `F a0` and `F b0`.
+fn yarns(model: &Model, positions: &[Vector3<f64>]) -> Vec<(Vector3<f64>, Vector3<f64>)> {
+    model
+        .elements
+        .iter()
+        .map(|e| {
+            let f = e.gradient(positions);
+            (f * e.fibres.warp.xy(), f * e.fibres.weft.xy())
+        })
+        .collect()
+}
+
+/// Thickness stretch of each layer of each element, element by element.
+fn stretches(model: &Model, state: &State) -> Vec<f64> {
+    state
+        .laminate_states
+        .iter()
+        .take(model.elements.len())
+        .flat_map(|s| s.thickness_stretch.iter().copied())
+        .collect()
+}
+
+/// The unit normal of the shell at each node: the mean of its elements' normals (their
+/// corners' winding), the side a tool is on is told against.
+fn node_normals(model: &Model, positions: &[Vector3<f64>]) -> Vec<Vector3<f64>> {
+    let mut normals = vec![Vector3::zeros(); positions.len()];
+    for e in &model.elements {
+        let nodes = e.nodes();
+        let (a, b, c) = (nodes[0], nodes[1], nodes[nodes.len() - 1]);
+        let n = (positions[b] - positions[a]).cross(&(positions[c] - positions[a]));
+        for &node in nodes {
+            normals[node] += n;
+        }
+    }
+    normals
+        .into_iter()
+        .map(|n| n.try_normalize(0.0).unwrap_or_else(Vector3::z))
+        .collect()
+}
