@@ -175,7 +175,7 @@ fn bad_histories_give_a_located_one_line_error() {
         (
             "too-hot.csv",
             format!("{header}{ok_row}# heating\n1,1,0,0,0,1,0,0,0,1,345\n"),
-            &["too-hot.csv: line 4", "345", "280 to 320"],
+            &["too-hot.csv: line 4", "345", "150 to 320"],
         ),
         (
             "time-back.csv",

@@ -450,7 +450,7 @@ fn temperature_outside_the_table_is_an_error() {
         matches!(e, MaterialError::TemperatureOutOfRange { .. }),
         "{e}"
     );
-    assert!(e.to_string().contains("280 to 320"), "{e}");
+    assert!(e.to_string().contains("150 to 320"), "{e}");
 }
 
 #[test]

@@ -280,6 +280,15 @@ fn heat_rows(
     let joules = |x: f64| x * 1e-3;
     let to_tools: f64 = q.to_tools.iter().sum();
     rows.push((
+        "heat equation",
+        format!(
+            "{:.2} s of the run's {:.1} s of wall time ({:.1} %)",
+            thermal.wall_seconds,
+            result.wall_seconds,
+            100.0 * thermal.wall_seconds / result.wall_seconds.max(1e-9)
+        ),
+    ));
+    rows.push((
         "heat",
         format!(
             "{:.2} J into the tools, {:.2} J into the air, {:.2} J released by crystallisation, \

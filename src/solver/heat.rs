@@ -7,10 +7,11 @@
 use super::error::SolverError;
 use super::model::Model;
 use super::state::State;
+use crate::contact::ply_contact::InterplyNode;
 use crate::element::bending::BendingRigidity;
 use crate::material::card::BendingCard;
 use crate::material::LayerTemperatures;
-use crate::thermal::blank::{BlankHeat, Face, HeatError, SheetNow};
+use crate::thermal::blank::{BlankHeat, Face, HeatError, PlyExchange, SheetNow};
 use nalgebra::Vector3;
 
 /// The heat problem of a run and its process: where the blank starts.
@@ -138,6 +139,7 @@ struct Sheet<'a> {
     yarns: Vec<(Vector3<f64>, Vector3<f64>)>,
     stretch: Vec<f64>,
     faces: Vec<[Face; 2]>,
+    ply_exchanges: Vec<PlyExchange>,
     friction_power: Vec<f64>,
 }
 
@@ -146,7 +148,7 @@ impl<'a> Sheet<'a> {
     fn of(model: &Model, state: &'a State) -> Self {
         let normals = node_normals(model, &state.positions);
         let areas = model.nodal_areas();
-        let faces = state
+        let mut faces: Vec<[Face; 2]> = state
             .contacts
             .iter()
             .zip(&normals)
@@ -185,23 +187,42 @@ impl<'a> Sheet<'a> {
                     .sum()
             })
             .collect();
+        let ply_exchanges = ply_exchanges(model, &state.positions, &state.interply);
+        for x in &ply_exchanges {
+            faces[x.node][x.face] = Face::Ply;
+        }
         Self {
             positions: &state.positions,
             yarns: yarns(model, &state.positions),
             stretch: stretches(model, state),
             faces,
+            ply_exchanges,
             friction_power,
         }
     }
 
-    /// The blank at rest in the air.
+    /// The blank at rest in the air: its outer faces in the air, the plies of a layup on one
+    /// another.
     fn at_rest(model: &Model, state: &'a State) -> Self {
         let nodes = state.positions.len();
+        let ply_exchanges = match model.ply_contact(1.0) {
+            Some(mut plies) => {
+                let mut lists = vec![InterplyNode::default(); nodes];
+                plies.relist_if_moved(&state.positions, &mut lists);
+                ply_exchanges(model, &state.positions, &lists)
+            }
+            None => Vec::new(),
+        };
+        let mut faces = vec![[Face::Air; 2]; nodes];
+        for x in &ply_exchanges {
+            faces[x.node][x.face] = Face::Ply;
+        }
         Self {
             positions: &state.positions,
             yarns: yarns(model, &state.positions),
             stretch: stretches(model, state),
-            faces: vec![[Face::Air; 2]; nodes],
+            faces,
+            ply_exchanges,
             friction_power: vec![0.0; nodes],
         }
     }
@@ -212,10 +233,45 @@ impl<'a> Sheet<'a> {
             yarns: &self.yarns,
             stretch: &self.stretch,
             faces: &self.faces,
-            ply_exchanges: &[],
+            ply_exchanges: &self.ply_exchanges,
             friction_power: &self.friction_power,
         }
     }
+}
+
+/// Two plies touch where the gap between their faces is below this share of the thinner
+/// ply's thickness **(choice)**: pressed together the penalty contact leaves them a small
+/// overlap; a gap of a tenth of a ply is air between them.
+const TOUCHING_GAP: f64 = 0.1;
+
+/// Where the plies of a layup touch: each node over the face of the ply across each of its
+/// sides (the triangles the contact lists near it), with half its area (the node of the other
+/// ply across the same film carries the other half).
+fn ply_exchanges(
+    model: &Model,
+    positions: &[Vector3<f64>],
+    lists: &[InterplyNode],
+) -> Vec<PlyExchange> {
+    let Some(plies) = model.ply_contact(1.0) else {
+        return Vec::new();
+    };
+    let limit = TOUCHING_GAP * model.thinnest_ply();
+    let mut exchanges = Vec::new();
+    for (a, node) in lists.iter().enumerate() {
+        for (face, side) in node.sides.iter().enumerate() {
+            let touch = plies.nearest(a, face, side.candidates(), positions);
+            if let Some(t) = touch.filter(|t| t.gap < limit) {
+                exchanges.push(PlyExchange {
+                    node: a,
+                    face,
+                    others: t.corners,
+                    weights: t.shares,
+                    area: 0.5 * plies.area(a),
+                });
+            }
+        }
+    }
+    exchanges
 }
 
 /// Current warp and weft of each element, `F a0` and `F b0`.

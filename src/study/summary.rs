@@ -6,7 +6,7 @@
 use super::design::Design;
 use super::file::{number, Case, Study};
 use super::run::{finished, CaseResult};
-use crate::forming::run::{RESULT_COLUMNS, RESULT_CSV};
+use crate::forming::run::RESULT_CSV;
 use crate::io::output_folder::ProductFiles;
 use crate::io::plot::{
     write_map_png, write_png, LegendCell, LinePlot, LineStyle, MapPlot, Series, MISSING_COLOUR,
@@ -15,14 +15,28 @@ use plotters::style::RGBColor;
 use std::path::{Path, PathBuf};
 
 /// The run's final measures a summary row carries: the columns of its `forming-result.csv`
-/// ([`RESULT_COLUMNS`]) after the status.
-pub const MEASURES: &[&str] = match RESULT_COLUMNS.split_first() {
-    Some((_, measures)) => measures,
-    None => &RESULT_COLUMNS,
-};
+/// (`forming::run::RESULT_COLUMNS`) after the status, then a non-isothermal run's
+/// (`forming::output::THERMAL_RESULT_COLUMNS`, empty for an isothermal case).
+pub const MEASURES: [&str; 15] = [
+    "stroke_reached",
+    "peak_punch_force",
+    "max_shear_deg",
+    "area_above_locking",
+    "max_thinning",
+    "lift_off",
+    "lifted_area",
+    "waviness",
+    "wavy_area",
+    "draw_in",
+    "energy_balance_error",
+    "temperature_min",
+    "temperature_mean",
+    "temperature_max",
+    "frozen_area",
+];
 pub const SUMMARY_CSV: &str = "summary.csv";
 /// The charts: `study-<name>.png`.
-const CHARTS: [&str; 2] = ["waviness", "max-shear"];
+const CHARTS: [&str; 3] = ["waviness", "max-shear", "peak-force"];
 
 /// The files the summary writes into the study's folder, by which a later summary finds and
 /// replaces them.
@@ -230,7 +244,7 @@ fn write_charts(study: &Study, rows: &[Row]) -> anyhow::Result<Vec<PathBuf>> {
 
 /// Each chart: the measure, its label with units, the waviness above which a case is flagged
 /// as wrinkled, and the chart's name.
-fn charts(study: &Study) -> [(&'static str, &'static str, Option<f64>, &'static str); 2] {
+fn charts(study: &Study) -> [(&'static str, &'static str, Option<f64>, &'static str); 3] {
     [
         (
             "waviness",
@@ -239,6 +253,7 @@ fn charts(study: &Study) -> [(&'static str, &'static str, Option<f64>, &'static 
             CHARTS[0],
         ),
         ("max_shear_deg", "largest shear angle (°)", None, CHARTS[1]),
+        ("peak_punch_force", "peak punch force (N)", None, CHARTS[2]),
     ]
 }
 
@@ -521,6 +536,20 @@ fn line_chart(study: &Study, rows: &[&Row], measure: &str, label: &str) -> LineP
 
 #[cfg(test)]
 mod tests {
+    /// The summary's measures are the result row's, in its order: a column added there must
+    /// come here.
+    #[test]
+    fn measures_are_the_result_columns() {
+        use crate::forming::output::THERMAL_RESULT_COLUMNS;
+        use crate::forming::run::RESULT_COLUMNS;
+        let expected: Vec<&str> = RESULT_COLUMNS[1..]
+            .iter()
+            .chain(&THERMAL_RESULT_COLUMNS)
+            .copied()
+            .collect();
+        assert_eq!(MEASURES.to_vec(), expected);
+    }
+
     use super::*;
 
     /// Values print to three significant digits; a cell without one says why.

@@ -154,6 +154,8 @@ pub struct ThermalState {
     /// Process time since the blank left the oven (s).
     pub time: f64,
     pub heat: HeatAccount,
+    /// Wall time spent advancing the field (s): what the heat equation costs the run.
+    pub wall_seconds: f64,
 }
 
 impl ThermalState {
@@ -256,6 +258,7 @@ impl BlankHeat {
             },
             cells,
             time: 0.0,
+            wall_seconds: 0.0,
             heat: HeatAccount {
                 to_tools: vec![0.0; self.tool_temperatures.len()],
                 ..HeatAccount::default()
@@ -274,6 +277,19 @@ impl BlankHeat {
         if dt <= 0.0 {
             return Ok(());
         }
+        let started = std::time::Instant::now();
+        let outcome = self.advance_timed(state, sheet, dt);
+        state.wall_seconds += started.elapsed().as_secs_f64();
+        outcome
+    }
+
+    /// [`Self::advance`] itself.
+    fn advance_timed(
+        &self,
+        state: &mut ThermalState,
+        sheet: &SheetNow,
+        dt: f64,
+    ) -> Result<(), HeatError> {
         let conduction = self.conduction(sheet)?;
         let areas = nodal_areas(&self.elements, sheet.positions);
         let capacities = self.capacities(state)?;
