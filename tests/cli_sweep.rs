@@ -317,6 +317,52 @@ fn the_example_study_runs_in_reduced_form() {
     }
 }
 
+/// The tutorial `examples/study-tool-temperature-transfer.toml` in a reduced form (two tool
+/// temperatures, one transfer time, 3 mm of stroke): both cases run, the summary
+/// carries the stack's temperatures, the colder tools leave it colder, and the peak-force chart
+/// is written.
+#[test]
+fn the_thermal_example_study_runs_in_reduced_form() {
+    let dir = scratch_dir("sweep", "thermal-example");
+    let _ = std::fs::remove_dir_all(dir.join("out"));
+    let text = std::fs::read_to_string(repo_path("examples/study-tool-temperature-transfer.toml"))
+        .unwrap();
+    let base = repo_path("examples/double-dome-nonisothermal.toml");
+    let reduced = text
+        .replace(
+            "base = \"double-dome-nonisothermal.toml\"",
+            &format!("base = \"{}\"", base.display()),
+        )
+        .replace(
+            "tools.temperature = [150.0, 190.0, 230.0]",
+            "tools.temperature = [170.0, 230.0]",
+        )
+        .replace(
+            "process.transfer_time = [2.0, 5.0, 10.0]",
+            "process.transfer_time = [2.0]",
+        )
+        .replace("process.stroke = [20.0]", "process.stroke = [3.0]")
+        .replace(
+            "folder = \"study-tool-temperature-transfer-results\"",
+            &format!("folder = \"{}\"", dir.join("out").display()),
+        );
+    let path = dir.join("study.toml");
+    std::fs::write(&path, reduced).unwrap();
+    let out = sweep(&path, &[]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(column(&dir, "status"), vec!["done"; 2]);
+    let coldest: Vec<f64> = column(&dir, "temperature_min")
+        .iter()
+        .map(|v| v.parse().unwrap())
+        .collect();
+    assert!(coldest[0] < coldest[1], "tools 170 and 230 °C: {coldest:?}");
+    assert!(dir.join("out/study-peak-force.png").exists());
+}
+
 /// `study.toml` in `dir` with a `[design]` section before the parameters of [`study`].
 fn designed_study(dir: &Path, design: &str, parameters: &str) -> PathBuf {
     let path = study(dir, "examples/hemisphere.toml", parameters);

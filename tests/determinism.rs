@@ -107,12 +107,14 @@ fn assert_has(files: &[String], extensions: &[&str]) {
 /// The hemisphere example on 10 mm cells, 3 mm of stroke, on each solver: the punch and the
 /// force-driven holder touch the blank, so the contact loads (which move the holder) and the
 /// element sums (the explicit solver's forces, the implicit one's assembled residual and
-/// tangent) both feed the trajectory. 1 and 2 threads write the same bytes.
+/// tangent) both feed the trajectory; and a hot blank on colder tools, whose temperature field
+/// (its columns solved in parallel) feeds the laminate. 1 and 2 threads write the same bytes.
 #[test]
 fn forming_run_is_bit_identical_on_one_and_two_threads() {
     for (solver, scenario) in [
         ("explicit", "tests/data/hemisphere-explicit.toml"),
         ("implicit", "examples/hemisphere.toml"),
+        ("non-isothermal", "tests/data/hemisphere-hot.toml"),
     ] {
         let args = [
             "run",

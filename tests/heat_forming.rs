@@ -205,7 +205,7 @@ fn bad_thermal_input_is_refused_by_key() {
     assert!(e.contains("process.blank_temperature"), "{e}");
 }
 
-/// examples/double-dome-nonisothermal.toml on 12 mm cells over 3 mm of stroke: it runs; the
+/// examples/double-dome-nonisothermal.toml on 10 mm cells over 3 mm of stroke: it runs; the
 /// four-ply stack left the oven at 320 °C and cooled from its two outer faces during the
 /// transfer, so at the start of the stroke the skin on the punch's side of the outer ply is
 /// colder than the fabric of the ply inside it; the plies exchange heat without creating any
@@ -215,7 +215,7 @@ fn the_nonisothermal_example_runs_in_reduced_form() {
     let (forming, run) = common::form(
         "examples/double-dome-nonisothermal.toml",
         &[
-            "blank.element_size=12".into(),
+            "blank.element_size=10".into(),
             "process.stroke=3".into(),
             "output.history_points=5".into(),
         ],
@@ -247,5 +247,24 @@ fn the_nonisothermal_example_runs_in_reduced_form() {
         "heat balance {:e} of {:e}",
         q.imbalance(),
         q.scale()
+    );
+}
+
+/// A blank left in air until it cools below the card's tables stops the run with the element,
+/// the time and the table named, and the run is not taken for finished.
+#[test]
+fn a_blank_cooled_below_the_tables_stops_naming_the_table() {
+    let (_, run) = hot(&["tools.temperature=150", "process.transfer_time=30"]);
+    let e = run
+        .outcome
+        .expect_err("a blank at 150 °C and below cannot be formed");
+    assert!(
+        matches!(e, thermostamp::solver::SolverError::Temperature { .. }),
+        "{e}"
+    );
+    let text = e.to_string();
+    assert!(
+        text.contains("element") && text.contains("below the crystallisation table"),
+        "{text}"
     );
 }

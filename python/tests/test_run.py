@@ -195,3 +195,20 @@ def test_a_folder_another_run_is_writing_raises_output_error(tmp_path):
     finally:
         other.kill()
         other.wait()
+
+
+def test_a_non_isothermal_run_hands_over_its_temperatures():
+    """tests/data/hemisphere-hot.toml: the blank out of the oven cools in the history, and the
+    frames carry each layer's temperature and crystallinity."""
+    scenario = ts.Scenario.load(ROOT / "tests" / "data" / "hemisphere-hot.toml", set={"process.stroke": 4.0})
+    result = ts.run(scenario)
+    assert result.ok, result.status
+    mean = result.history["temperature_mean"]
+    assert mean[0] < 320.0 and mean[-1] < mean[0]
+    assert np.all(result.history["temperature_min"] <= mean)
+    assert np.all(mean <= result.history["temperature_max"])
+    cells = result.frame.cell_data
+    for name in ["temperature", "temperature_layer_1", "temperature_layer_3", "crystallinity_layer_2", "frozen"]:
+        assert name in cells, name
+    assert np.all(cells["temperature_layer_1"] < 320.0)
+    assert result.summary["temperature_mean"] == pytest.approx(mean[-1], rel=1e-12)

@@ -349,6 +349,7 @@ pub fn heat_model(
             SolverKind::Implicit => 1.0,
         },
         bending: cards.iter().map(|(c, _)| c.bending.clone()).collect(),
+        card_ranges: cards.iter().map(|(c, _)| c.temperature_range()).collect(),
     })
 }
 

@@ -63,7 +63,11 @@ impl FormingRun {
     pub fn formed_state(&self) -> Option<&State> {
         match &self.outcome {
             Ok(state) => Some(state),
-            Err(SolverError::NotConverged { .. } | SolverError::Interrupted { .. }) => self
+            Err(
+                SolverError::NotConverged { .. }
+                | SolverError::Interrupted { .. }
+                | SolverError::Temperature { .. },
+            ) => self
                 .last_recorded
                 .as_ref()
                 .filter(|s| s.positions.iter().all(|x| x.iter().all(|c| c.is_finite()))),

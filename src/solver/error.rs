@@ -18,6 +18,18 @@ pub enum SolverError {
         internal: f64,
         external: f64,
     },
+    /// In a non-isothermal run, the blank's temperature left one of the card's tables
+    /// (docs/model.md §9): the run stops, its records kept.
+    #[error(
+        "the blank's temperature left the card's tables at step {step}, t = {time:.6e} s, in \
+         element {element}: {reason} (the records so far are kept)"
+    )]
+    Temperature {
+        step: usize,
+        time: f64,
+        element: usize,
+        reason: String,
+    },
     #[error("bad solver settings: {0}")]
     Settings(String),
     #[error("writing results at t = {time:.6e} s: {source:#}")]
@@ -78,6 +90,10 @@ pub fn outcome_status(outcome: &Result<State, SolverError>) -> String {
         Err(SolverError::Unstable { step, time, .. }) => {
             format!("unstable at step {step}, t = {time:.4e} s, results so far kept")
         }
+        Err(SolverError::Temperature { step, time, .. }) => format!(
+            "stopped at step {step}, t = {time:.4e} s: a temperature outside the card's tables, \
+             results so far kept"
+        ),
         Err(SolverError::Output { time, .. }) => {
             format!("stopped at t = {time:.4e} s: a result could not be written")
         }

@@ -28,6 +28,9 @@ pub struct HeatModel {
     /// Each ply's bending rigidity table (its card's `[bending]`), evaluated at each element's
     /// temperature; `None` for a ply without bending.
     pub bending: Vec<Option<BendingCard>>,
+    /// Each ply's card's mechanical tables' common range (°C); `None` where nothing is
+    /// tabulated.
+    pub card_ranges: Vec<Option<(f64, f64)>>,
 }
 
 /// The blank out of the oven and carried through the air for the transfer time, at rest on no
@@ -77,6 +80,7 @@ fn update_layer_temperatures(model: &Model, state: &mut State) -> Result<(), Sol
         .chunks(layers)
         .map(|t| LayerTemperatures::per_layer(t).unwrap_or_else(|_| t[0].into()))
         .collect();
+    check_card_ranges(model, heat, state)?;
     if model.bending.is_none() {
         return Ok(());
     }
@@ -92,21 +96,13 @@ fn update_layer_temperatures(model: &Model, state: &mut State) -> Result<(), Sol
             continue;
         };
         let mean: f64 = t.iter().zip(&shares[p]).map(|(t, w)| t * w).sum();
-        match table.at(mean) {
-            Ok(r) => rigidities.push(r),
-            Err(e) => {
-                let element = k;
-                return Err(SolverError::Unstable {
-                    step: state.step,
-                    time: state.time,
-                    element,
-                    reason: format!("bending rigidity at the element's temperature: {e}"),
-                    kinetic: state.energies.kinetic,
-                    internal: state.energies.internal_work,
-                    external: state.energies.external_work,
-                });
-            }
-        }
+        let rigidity = table.at(mean).map_err(|e| SolverError::Temperature {
+            step: state.step,
+            time: state.time,
+            element: k,
+            reason: format!("bending rigidity at the element's temperature: {e}"),
+        })?;
+        rigidities.push(rigidity);
     }
     state.bending_rigidities = rigidities;
     Ok(())
@@ -119,18 +115,41 @@ fn heat_failure(state: &State, model: &Model, error: HeatError, when: &str) -> S
         .iter()
         .position(|e| e.nodes().contains(&error.node))
         .unwrap_or(0);
-    SolverError::Unstable {
+    SolverError::Temperature {
         step: state.step,
         time: state.time,
         element,
-        reason: format!(
-            "the blank's temperature {when}, at node {}: {}",
-            error.node, error.reason
-        ),
-        kinetic: state.energies.kinetic,
-        internal: state.energies.internal_work,
-        external: state.energies.external_work,
+        reason: format!("{when}, at node {}: {}", error.node, error.reason),
     }
+}
+
+/// Every layer of every element within its card's mechanical tables (`[matrix]`, `[bending]`):
+/// a layer cooled below them stops the run naming the element, rather than the next increment
+/// failing on it.
+fn check_card_ranges(model: &Model, heat: &HeatModel, state: &State) -> Result<(), SolverError> {
+    let layers = heat.blank.layers();
+    for (k, t) in state.temperatures.iter().enumerate() {
+        let Some((low, high)) = heat.card_ranges[model.ply_index(k)] else {
+            continue;
+        };
+        for layer in 0..layers {
+            let value = t.layer(layer);
+            if !crate::limits::between(value, low, high) {
+                return Err(SolverError::Temperature {
+                    step: state.step,
+                    time: state.time,
+                    element: k,
+                    reason: format!(
+                        "layer {} ({}) at {value:.2} °C, outside the card's [matrix] and \
+                         [bending] tables ({low} to {high} °C)",
+                        layer + 1,
+                        model.laminate(k).layers()[layer].law.name()
+                    ),
+                });
+            }
+        }
+    }
+    Ok(())
 }
 
 /// What the heat equation reads of a state, gathered once per step.

@@ -858,3 +858,237 @@ fn nodal_areas(elements: &[Vec<usize>], positions: &[Vector3<f64>]) -> Vec<f64> 
 pub fn heat_transfer(w_per_m2_k: f64) -> f64 {
     w_per_m2_k * HEAT_TRANSFER_UNIT
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::thermal::crystallisation::Nakamura;
+    use crate::thermal::properties::{Crystallisation, LATENT_HEAT_UNIT, SPECIFIC_HEAT_UNIT};
+
+    /// A flat blank of `n x n` square cells of `size` mm in z = 0, one ply of an A:B:A stack.
+    fn blank(n: usize, size: f64, crystallises: bool) -> (BlankHeat, Vec<Vector3<f64>>) {
+        let mut positions = Vec::new();
+        for j in 0..=n {
+            for i in 0..=n {
+                positions.push(Vector3::new(i as f64 * size, j as f64 * size, 0.0));
+            }
+        }
+        let at = |i: usize, j: usize| j * (n + 1) + i;
+        let elements: Vec<Vec<usize>> = (0..n)
+            .flat_map(|j| (0..n).map(move |i| (i, j)))
+            .map(|(i, j)| vec![at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)])
+            .collect();
+        let crystallisation = crystallises.then(|| Crystallisation {
+            kinetics: Nakamura::new(3.0, vec![100.0, 250.0], vec![0.5, 0.05]).unwrap(),
+            latent_heat: 20.0 * LATENT_HEAT_UNIT,
+            frozen_at: 0.5,
+        });
+        let properties = ThermalProperties {
+            specific_heat: Table::new(
+                "specific_heat",
+                vec![0.0, 400.0],
+                vec![900.0 * SPECIFIC_HEAT_UNIT, 1500.0 * SPECIFIC_HEAT_UNIT],
+            )
+            .unwrap(),
+            conductivity_warp: 3.0,
+            conductivity_weft: 1.0,
+            conductivity_through: 0.35,
+            matrix_conductivity: 0.3,
+            emissivity: 0.9,
+            crystallisation,
+        };
+        let ply = PlyHeat {
+            properties,
+            density: 1.56e-9,
+            layers: vec![
+                (LayerKind::Matrix, 0.04),
+                (LayerKind::Fabric, 0.23),
+                (LayerKind::Matrix, 0.04),
+            ],
+        };
+        let settings = HeatSettings {
+            cells_per_layer: 3,
+            time_step: 0.01,
+            air: AirExchange {
+                convection: 0.01,
+                emissivity: 0.0,
+                room_temperature: 25.0,
+            },
+            contact_conductance: vec![(0.0, 0.5), (1.0, 2.0)],
+            interply_conductance: 3.0,
+            friction_heat_fraction: 0.5,
+        };
+        let count = elements.len();
+        let heat = BlankHeat::new(
+            vec![ply],
+            elements,
+            vec![0; count],
+            &positions,
+            vec![200.0],
+            settings,
+        )
+        .unwrap();
+        (heat, positions)
+    }
+
+    /// Half the blank on a tool, the rest in air, friction heating a corner, the matrix
+    /// crystallising: the heat content changes by what went in and out (Eq. (H10)) to 1e-12,
+    /// every flow is at work, and the tool side ends colder than the air side.
+    #[test]
+    fn heat_balances_with_every_flow_at_work() {
+        let (heat, positions) = blank(4, 5.0, true);
+        let nodes = positions.len();
+        let faces: Vec<[Face; 2]> = positions
+            .iter()
+            .map(|x| match x.x < 10.0 {
+                true => [
+                    Face::Tool {
+                        tool: 0,
+                        pressure: 0.5,
+                    },
+                    Face::Air,
+                ],
+                false => [Face::Air, Face::Air],
+            })
+            .collect();
+        let mut friction = vec![0.0; nodes];
+        friction[0] = 50.0;
+        let yarns = vec![(Vector3::x(), Vector3::y()); 16];
+        let stretch = vec![1.0; 16 * 3];
+        let sheet = SheetNow {
+            positions: &positions,
+            yarns: &yarns,
+            stretch: &stretch,
+            faces: &faces,
+            ply_exchanges: &[],
+            friction_power: &friction,
+        };
+        let mut state = heat.uniform(260.0);
+        heat.advance(&mut state, &sheet, 0.3).unwrap();
+        // node 5 lies at (0, 5 mm): on the tool, off the rubbed corner; the last in the air
+        let (on_tool, in_air) = (state.column(5), state.column(nodes - 1));
+        assert!(on_tool[0] < in_air[0], "{on_tool:?} against {in_air:?}");
+        assert!(
+            on_tool[0] < on_tool[8],
+            "the face on the tool is colder: {on_tool:?}"
+        );
+        heat.advance(&mut state, &sheet, 2.7).unwrap();
+        let q = &state.heat;
+        assert!(q.to_tools[0] > 0.0 && q.to_air > 0.0 && q.latent > 0.0 && q.friction > 0.0);
+        assert!(
+            q.imbalance().abs() <= 1e-12 * q.scale(),
+            "imbalance {:e} of {:e}",
+            q.imbalance(),
+            q.scale()
+        );
+    }
+
+    /// Everything at one temperature, no friction: the field does not move by a bit, whatever
+    /// the stretch of the sheet (the isothermal limit).
+    #[test]
+    fn a_uniform_field_at_its_surroundings_temperature_stays_put() {
+        let (mut heat, positions) = blank(3, 4.0, false);
+        heat.settings.air.room_temperature = 200.0;
+        let moved: Vec<Vector3<f64>> = positions
+            .iter()
+            .map(|x| Vector3::new(1.1 * x.x, 0.9 * x.y, 0.05 * x.x))
+            .collect();
+        let faces = vec![
+            [
+                Face::Tool {
+                    tool: 0,
+                    pressure: 0.3
+                },
+                Face::Air
+            ];
+            positions.len()
+        ];
+        let yarns = vec![(Vector3::new(1.0, 0.2, 0.0), Vector3::y()); 9];
+        let stretch = vec![0.95; 9 * 3];
+        let friction = vec![0.0; positions.len()];
+        let sheet = SheetNow {
+            positions: &moved,
+            yarns: &yarns,
+            stretch: &stretch,
+            faces: &faces,
+            ply_exchanges: &[],
+            friction_power: &friction,
+        };
+        let mut state = heat.uniform(200.0);
+        heat.advance(&mut state, &sheet, 1.0).unwrap();
+        assert!(state.temperatures.iter().all(|&t| t == 200.0));
+        assert_eq!(state.heat.stored, 0.0);
+    }
+
+    /// Two plies stacked node over node exchange heat through their touching faces: a hot ply on
+    /// a cold one warms it, the heat one loses the other gains.
+    #[test]
+    fn plies_in_contact_share_their_heat() {
+        let (single, positions) = blank(2, 5.0, false);
+        let n = positions.len();
+        let mut stacked = positions.clone();
+        stacked.extend(positions.iter().map(|x| x + Vector3::new(0.0, 0.0, 0.31)));
+        let elements: Vec<Vec<usize>> = single
+            .elements
+            .iter()
+            .cloned()
+            .chain(
+                single
+                    .elements
+                    .iter()
+                    .map(|e| e.iter().map(|a| a + n).collect()),
+            )
+            .collect();
+        let heat = BlankHeat::new(
+            vec![single.plies[0].clone(), single.plies[0].clone()],
+            elements,
+            vec![0, 0, 0, 0, 1, 1, 1, 1],
+            &stacked,
+            vec![200.0],
+            single.settings.clone(),
+        )
+        .unwrap();
+        let exchanges: Vec<PlyExchange> = (0..n)
+            .flat_map(|a| {
+                let up = PlyExchange {
+                    node: a,
+                    face: 1,
+                    others: [a + n, a + n, a + n],
+                    weights: [1.0, 0.0, 0.0],
+                    area: 0.5 * heat.reference_areas[a],
+                };
+                let down = PlyExchange {
+                    node: a + n,
+                    face: 0,
+                    others: [a, a, a],
+                    weights: [1.0, 0.0, 0.0],
+                    area: 0.5 * heat.reference_areas[a],
+                };
+                [up, down]
+            })
+            .collect();
+        let mut faces = vec![[Face::Air, Face::Ply]; n];
+        faces.extend(vec![[Face::Ply, Face::Air]; n]);
+        let yarns = vec![(Vector3::x(), Vector3::y()); 8];
+        let stretch = vec![1.0; 8 * 3];
+        let friction = vec![0.0; 2 * n];
+        let sheet = SheetNow {
+            positions: &stacked,
+            yarns: &yarns,
+            stretch: &stretch,
+            faces: &faces,
+            ply_exchanges: &exchanges,
+            friction_power: &friction,
+        };
+        let mut state = heat.uniform(300.0);
+        for t in state.temperatures[..n * state.cells].iter_mut() {
+            *t = 250.0;
+        }
+        heat.advance(&mut state, &sheet, 0.5).unwrap();
+        let lower = state.column(0)[8];
+        let upper = state.column(n)[0];
+        assert!(lower > 250.0 && upper < 300.0, "{lower} {upper}");
+        let q = &state.heat;
+        assert!(q.imbalance().abs() <= 1e-12 * q.scale());
+    }
+}
