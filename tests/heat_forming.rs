@@ -268,3 +268,61 @@ fn a_blank_cooled_below_the_tables_stops_naming_the_table() {
         "{text}"
     );
 }
+
+/// The friction between plies follows their temperature: with `blank.interply.friction` a table
+/// from 0.5 at 150 °C to 0.1 at 320 °C, each interface ends the stroke with the table's value at
+/// the mean temperature of its two facing skins, above the 0.1 of the blank out of the oven.
+#[test]
+fn interply_friction_follows_the_interfaces_temperature() {
+    let (forming, run) = common::form(
+        "examples/double-dome-nonisothermal.toml",
+        &[
+            "blank.element_size=10".into(),
+            "process.stroke=3".into(),
+            "output.history_points=3".into(),
+            "blank.interply.friction=[[150.0, 0.5], [320.0, 0.1]]".into(),
+        ],
+    );
+    let state = run.outcome.expect("the example runs");
+    let model = &forming.model;
+    assert_eq!(state.interface_frictions.len(), 3);
+    for (face, friction) in model.interfaces.iter().zip(&state.interface_frictions) {
+        let facing = [(face.lower, 2), (face.upper, 0)];
+        let (mut sum, mut area) = (0.0, 0.0);
+        for (ply, layer) in facing {
+            for k in model.plies[ply].elements.clone() {
+                sum += model.elements[k].area * state.temperatures[k].layer(layer);
+                area += model.elements[k].area;
+            }
+        }
+        let t = sum / area;
+        let expected = 0.5 + (0.1 - 0.5) * (t - 150.0) / 170.0;
+        assert!(t < 318.0, "interface {}: {t} °C", face.lower + 1);
+        assert!(
+            (friction.coulomb - expected).abs() < 1e-12 && friction.coulomb > 0.1,
+            "interface {}: mu {} at {t:.2} °C, the table gives {expected}",
+            face.lower + 1,
+            friction.coulomb
+        );
+    }
+}
+
+/// A layup whose interply friction table does not reach down to the tools' temperature is
+/// refused before the first step, naming the tool's key and the table's.
+#[test]
+fn an_interply_table_short_of_the_tools_is_refused() {
+    let overrides: Vec<String> = ["blank.interply.friction=[[280.0, 0.3], [320.0, 0.2]]"]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    let scenario = Scenario::load(
+        &common::repo_path("examples/double-dome-nonisothermal.toml"),
+        &overrides,
+    )
+    .expect("the scenario itself is sound at the blank's temperature");
+    let e = FormingModel::new(&scenario).err().expect("refused");
+    assert!(
+        e.contains("tools.punch.temperature") && e.contains("blank.interply.friction"),
+        "{e}"
+    );
+}

@@ -155,6 +155,14 @@ impl PlyContact {
         }
     }
 
+    /// Each interface's friction replaced by `frictions` (in the order of the interfaces): a
+    /// non-isothermal run's, at the interfaces' temperatures now.
+    pub fn set_frictions(&mut self, frictions: &[FilmFriction]) {
+        for (face, friction) in self.interfaces.iter_mut().zip(frictions) {
+            face.friction = *friction;
+        }
+    }
+
     /// The ply across side `side` (0 below, 1 above) of ply `p`, and the interface.
     fn across(&self, p: usize, side: usize) -> Option<(usize, &PlyInterface)> {
         let face = &self.interfaces[self.neighbours[p][side]?];

@@ -3,18 +3,21 @@
 //! air, the tools at `tools.punch.temperature` etc., and the heat exchanges of `[thermal]`.
 //! Values are given in the units of data sheets (W/(m²·K)) and kept in the program's.
 
+use super::scenario::InterfaceLaw;
 use super::scenario::Scenario;
+use crate::contact::ply_contact::FilmFriction;
 use crate::limits::{
     check_given, HEAT_TRANSFER, PRESSURE, PROCESS_TIME, TEMPERATURE, THERMAL_STEP,
 };
 use crate::material::MaterialCard;
-use crate::solver::heat::HeatModel;
+use crate::solver::heat::{FrictionLaw, HeatModel, InterfaceFriction};
 use crate::solver::{Model, SolverKind};
 use crate::thermal::air::AirExchange;
 use crate::thermal::blank::{heat_transfer, BlankHeat, HeatSettings, LayerKind, PlyHeat};
 use crate::thermal::ThermalProperties;
 use serde::Deserialize;
 use std::path::Path;
+use std::sync::Arc;
 
 /// What a non-isothermal run adds to a scenario, checked.
 #[derive(Clone, Debug, PartialEq)]
@@ -302,6 +305,14 @@ pub fn heat_model(
         let holder = heat.holder.ok_or("tools.holder.temperature is needed")?;
         tools.push(("tools.holder.temperature", holder));
     }
+    if let Some(layup) = &s.blank.layup {
+        // a face of the stack can cool to the coldest tool: the film's tables must hold there
+        for law in &layup.laws {
+            for &(key, t) in &tools {
+                law.at(t).map_err(|e| format!("{key} = {t} °C: {e}"))?;
+            }
+        }
+    }
     let mut plies = Vec::with_capacity(model.plies.len());
     for (ply, &(card, path)) in model.plies.iter().zip(cards) {
         let refuse = |e: String| format!("{e} (card {})", path.display());
@@ -350,7 +361,42 @@ pub fn heat_model(
         },
         bending: cards.iter().map(|(c, _)| c.bending.clone()).collect(),
         card_ranges: cards.iter().map(|(c, _)| c.temperature_range()).collect(),
+        interface_friction: interface_friction(s),
     })
+}
+
+/// Each interface's law of a layup, at the physical speeds scaled as the model's interfaces are
+/// (`layup::layup_model`); none for one ply.
+fn interface_friction(s: &Scenario) -> Vec<InterfaceFriction> {
+    let Some(layup) = &s.blank.layup else {
+        return Vec::new();
+    };
+    layup
+        .laws
+        .iter()
+        .map(|law| {
+            Arc::new(ScaledLaw {
+                law: law.clone(),
+                time_scaling: s.process.time_scaling,
+            }) as InterfaceFriction
+        })
+        .collect()
+}
+
+/// An interface's law at the physical speeds, its film scaled for a run `time_scaling` times
+/// faster (docs/model.md §6).
+#[derive(Debug)]
+struct ScaledLaw {
+    law: InterfaceLaw,
+    time_scaling: f64,
+}
+
+impl FrictionLaw for ScaledLaw {
+    fn at(&self, temperature: f64) -> Result<FilmFriction, String> {
+        self.law
+            .at(temperature)
+            .map(|f| f.time_scaled(self.time_scaling))
+    }
 }
 
 /// The card's tables hold at the blank out of the oven and at every tool's temperature (the

@@ -250,7 +250,7 @@ fn temperature_map(
         })
         .collect();
     let view = View::iso(stroke_axis(forming));
-    let title = format!("Temperature through the ply, end of stroke (iso view)\n{run}");
+    let title = format!("Temperature at the end (iso view)\n{run}");
     let mut map = part_map(
         forming,
         (&state.positions, &view),

@@ -58,6 +58,9 @@ pub struct Layup {
     /// pair; at `process.temperature` and the physical speeds (the solver's time scaling is
     /// applied when the model is built).
     pub interfaces: Vec<FilmFriction>,
+    /// The law of each interface as written, which a non-isothermal run evaluates at the
+    /// interface's temperature as the run goes.
+    pub laws: Vec<InterfaceLaw>,
     /// Whether the plies came as `blank.ply_angles` (the keys named in messages).
     pub from_angles: bool,
 }
@@ -133,11 +136,26 @@ impl PlyTable {
     }
 }
 
+/// The friction law of one interface as written (`blank.interply` or a `[[blank.interfaces]]`
+/// table), at any temperature: its values at the physical speeds, checked as the scenario's.
+#[derive(Clone, Debug, PartialEq)]
+pub struct InterfaceLaw {
+    key: String,
+    table: InterplyTable,
+}
+
+impl InterfaceLaw {
+    /// The friction at `temperature` (°C); outside a table an error naming the key.
+    pub fn at(&self, temperature: f64) -> Result<FilmFriction, String> {
+        self.table.friction(&self.key, temperature)
+    }
+}
+
 /// `[blank.interply]` or a `[[blank.interfaces]]` table as written: Eqs. (F1)–(F3) of
 /// docs/model.md. `friction`,
 /// `film_viscosity`, `film_consistency` and `yield_stress` are numbers or tables of
 /// `[temperature °C, value]` pairs ([`ByTemperature`]), taken at `process.temperature`.
-#[derive(Deserialize)]
+#[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct InterplyTable {
     /// `[[blank.interfaces]]` only: the two neighbouring plies the table is between.
@@ -160,7 +178,7 @@ struct InterplyTable {
 }
 
 /// A ply named in `[[blank.interfaces]]`: its place from the punch's side (from 1) or its name.
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(untagged)]
 enum PlyRef {
     Place(i64),
@@ -575,18 +593,24 @@ impl BlankTable {
         }
         // a table is read at the run's temperature: that must be a temperature first
         TEMPERATURE.check("process.temperature", temperature)?;
-        let interfaces = self.interfaces(&plies, temperature)?;
+        let (interfaces, laws) = self.interfaces(&plies, temperature)?;
         Ok(Some(Layup {
             plies,
             interfaces,
+            laws,
             from_angles: self.ply_angles.is_some(),
         }))
     }
 
-    /// The friction between each two neighbouring `plies` at `temperature` (°C):
-    /// `[[blank.interfaces]]`'s where a table names the pair, `blank.interply`'s elsewhere.
-    fn interfaces(&self, plies: &[PlySpec], temperature: f64) -> Result<Vec<FilmFriction>, String> {
-        let mut own: Vec<Option<FilmFriction>> = vec![None; plies.len() - 1];
+    /// The friction between each two neighbouring `plies` at `temperature` (°C), and each
+    /// pair's law: `[[blank.interfaces]]`'s where a table names the pair, `blank.interply`'s
+    /// elsewhere.
+    fn interfaces(
+        &self,
+        plies: &[PlySpec],
+        temperature: f64,
+    ) -> Result<(Vec<FilmFriction>, Vec<InterfaceLaw>), String> {
+        let mut own: Vec<Option<(FilmFriction, InterfaceLaw)>> = vec![None; plies.len() - 1];
         for (i, table) in self.interfaces.iter().flatten().enumerate() {
             let key = format!("blank.interfaces[{}]", i + 1);
             let lower = table.neighbours(&key, plies)?;
@@ -597,7 +621,14 @@ impl BlankTable {
                     lower + 2
                 ));
             }
-            own[lower] = Some(table.friction(&key, temperature)?);
+            let friction = table.friction(&key, temperature)?;
+            own[lower] = Some((
+                friction,
+                InterfaceLaw {
+                    key,
+                    table: table.clone(),
+                },
+            ));
         }
         if let Some(table) = &self.interply {
             if table.between.is_some() {
@@ -610,19 +641,26 @@ impl BlankTable {
             }
         }
         let default = match &self.interply {
-            Some(table) => Some(table.friction("blank.interply", temperature)?),
+            Some(table) => Some((
+                table.friction("blank.interply", temperature)?,
+                InterfaceLaw {
+                    key: "blank.interply".into(),
+                    table: table.clone(),
+                },
+            )),
             None => None,
         };
         own.into_iter()
             .map(|f| {
-                f.or(default).ok_or_else(|| {
+                f.or_else(|| default.clone()).ok_or_else(|| {
                     "a layup needs blank.interply.friction, the Coulomb friction between its \
                      plies (docs/model.md, \"Friction through the molten film\"), unless a \
                      [[blank.interfaces]] table gives every pair's"
                         .to_string()
                 })
             })
-            .collect()
+            .collect::<Result<Vec<_>, _>>()
+            .map(|pairs| pairs.into_iter().unzip())
     }
 }
 

@@ -157,6 +157,7 @@ pub fn run(
             tool_contact(model, &mut state, full_step);
         }
         if let Some(plies) = &mut ply_contact {
+            plies.set_frictions(&state.interface_frictions);
             let nodes = PlyNodes {
                 positions: &state.positions,
                 velocities: &state.velocities,

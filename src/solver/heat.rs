@@ -7,12 +7,14 @@
 use super::error::SolverError;
 use super::model::Model;
 use super::state::State;
+use crate::contact::ply_contact::FilmFriction;
 use crate::contact::ply_contact::InterplyNode;
 use crate::element::bending::BendingRigidity;
 use crate::material::card::BendingCard;
 use crate::material::LayerTemperatures;
 use crate::thermal::blank::{BlankHeat, Face, HeatError, PlyExchange, SheetNow};
 use nalgebra::Vector3;
+use std::sync::Arc;
 
 /// The heat problem of a run and its process: where the blank starts.
 #[derive(Clone, Debug)]
@@ -31,7 +33,20 @@ pub struct HeatModel {
     /// Each ply's card's mechanical tables' common range (°C); `None` where nothing is
     /// tabulated.
     pub card_ranges: Vec<Option<(f64, f64)>>,
+    /// The friction law of each interface of a layup at a temperature (°C), time-scaled as the
+    /// model's interfaces are (docs/model.md §9, "The law at the local temperature"); empty for
+    /// one ply.
+    pub interface_friction: Vec<InterfaceFriction>,
 }
+
+/// An interface's friction law: the friction at a temperature (°C), or why there is none (a
+/// temperature outside its tables, named).
+pub trait FrictionLaw: std::fmt::Debug + Send + Sync {
+    fn at(&self, temperature: f64) -> Result<FilmFriction, String>;
+}
+
+/// An interface's friction law as the model holds it.
+pub type InterfaceFriction = Arc<dyn FrictionLaw>;
 
 /// The blank out of the oven and carried through the air for the transfer time, at rest on no
 /// tool: the state's temperature field and its layers' temperatures. Nothing in an isothermal
@@ -81,6 +96,7 @@ fn update_layer_temperatures(model: &Model, state: &mut State) -> Result<(), Sol
         .map(|t| LayerTemperatures::per_layer(t).unwrap_or_else(|_| t[0].into()))
         .collect();
     check_card_ranges(model, heat, state)?;
+    update_interface_frictions(model, heat, state)?;
     if model.bending.is_none() {
         return Ok(());
     }
@@ -121,6 +137,44 @@ fn heat_failure(state: &State, model: &Model, error: HeatError, when: &str) -> S
         element,
         reason: format!("{when}, at node {}: {}", error.node, error.reason),
     }
+}
+
+/// Each interface's friction at its temperature: the area-weighted mean of the two facing
+/// skins, the top layer of the ply below and the bottom layer of the ply above.
+fn update_interface_frictions(
+    model: &Model,
+    heat: &HeatModel,
+    state: &mut State,
+) -> Result<(), SolverError> {
+    if heat.interface_friction.is_empty() {
+        return Ok(());
+    }
+    let layers = heat.blank.layers();
+    let mut frictions = Vec::with_capacity(model.interfaces.len());
+    for (law, face) in heat.interface_friction.iter().zip(&model.interfaces) {
+        let facing = [(face.lower, layers - 1), (face.upper, 0)];
+        let (mut sum, mut area) = (0.0, 0.0);
+        for (ply, layer) in facing {
+            for k in model.plies[ply].elements.clone() {
+                sum += model.elements[k].area * state.temperatures[k].layer(layer);
+                area += model.elements[k].area;
+            }
+        }
+        let temperature = sum / area;
+        let friction = law.at(temperature).map_err(|e| SolverError::Temperature {
+            step: state.step,
+            time: state.time,
+            element: model.plies[face.lower].elements.start,
+            reason: format!(
+                "the friction between plies {} and {} at {temperature:.2} °C: {e}",
+                face.lower + 1,
+                face.upper + 1
+            ),
+        })?;
+        frictions.push(friction);
+    }
+    state.interface_frictions = frictions;
+    Ok(())
 }
 
 /// Every layer of every element within its card's mechanical tables (`[matrix]`, `[bending]`):
@@ -167,7 +221,7 @@ impl<'a> Sheet<'a> {
     fn of(model: &Model, state: &'a State) -> Self {
         let normals = node_normals(model, &state.positions);
         let areas = model.nodal_areas();
-        let mut faces: Vec<[Face; 2]> = state
+        let faces: Vec<[Face; 2]> = state
             .contacts
             .iter()
             .zip(&normals)
@@ -207,17 +261,7 @@ impl<'a> Sheet<'a> {
             })
             .collect();
         let ply_exchanges = ply_exchanges(model, &state.positions, &state.interply);
-        for x in &ply_exchanges {
-            faces[x.node][x.face] = Face::Ply;
-        }
-        Self {
-            positions: &state.positions,
-            yarns: yarns(model, &state.positions),
-            stretch: stretches(model, state),
-            faces,
-            ply_exchanges,
-            friction_power,
-        }
+        Self::with_plies(model, state, (faces, ply_exchanges), friction_power)
     }
 
     /// The blank at rest in the air: its outer faces in the air, the plies of a layup on one
@@ -232,7 +276,18 @@ impl<'a> Sheet<'a> {
             }
             None => Vec::new(),
         };
-        let mut faces = vec![[Face::Air; 2]; nodes];
+        let faces = vec![[Face::Air; 2]; nodes];
+        Self::with_plies(model, state, (faces, ply_exchanges), vec![0.0; nodes])
+    }
+
+    /// The sheet of `state` with these faces, the faces across which plies exchange heat
+    /// turned to [`Face::Ply`].
+    fn with_plies(
+        model: &Model,
+        state: &'a State,
+        (mut faces, ply_exchanges): (Vec<[Face; 2]>, Vec<PlyExchange>),
+        friction_power: Vec<f64>,
+    ) -> Self {
         for x in &ply_exchanges {
             faces[x.node][x.face] = Face::Ply;
         }
@@ -242,7 +297,7 @@ impl<'a> Sheet<'a> {
             stretch: stretches(model, state),
             faces,
             ply_exchanges,
-            friction_power: vec![0.0; nodes],
+            friction_power,
         }
     }
 

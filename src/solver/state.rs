@@ -5,7 +5,7 @@
 use super::energy::Energies;
 use super::model::Model;
 use crate::contact::penalty::{NodeContact, ToolLoad};
-use crate::contact::ply_contact::InterplyNode;
+use crate::contact::ply_contact::{FilmFriction, InterplyNode};
 use crate::element::bending::{BendingPatch, BendingRigidity};
 use crate::material::{
     LaminateState, LayerTemperatures, MaterialError, MembraneKinematics, MembraneResponse,
@@ -63,6 +63,9 @@ pub struct State {
     /// The bending rigidity of each element at its temperature; empty in an isothermal run,
     /// where each bending patch's own holds.
     pub bending_rigidities: Vec<BendingRigidity>,
+    /// The friction of each interface of a layup at its temperature; empty in an isothermal
+    /// run, where the model's interfaces' hold.
+    pub interface_frictions: Vec<FilmFriction>,
 }
 
 impl State {
@@ -110,6 +113,7 @@ impl State {
             thermal: None,
             temperatures: Vec::new(),
             bending_rigidities: Vec::new(),
+            interface_frictions: Vec::new(),
         }
     }
 

@@ -510,6 +510,17 @@ pub fn parameter_title(key: &str) -> String {
         ("tools.die_opening_radius", "die opening radius", "mm"),
         ("tools.die_fillet_radius", "die fillet radius", "mm"),
         ("tools.holder_inner_radius", "holder inner radius", "mm"),
+        ("process.blank_temperature", "blank out of the oven", "°C"),
+        ("process.transfer_time", "transfer time in air", "s"),
+        ("tools.temperature", "tool temperature", "°C"),
+        ("tools.punch.temperature", "punch temperature", "°C"),
+        ("tools.die.temperature", "die temperature", "°C"),
+        ("tools.holder.temperature", "holder temperature", "°C"),
+        (
+            "thermal.contact_conductance",
+            "contact conductance",
+            "W/(m²·K)",
+        ),
     ];
     match known.iter().find(|(k, _, _)| *k == key) {
         Some((_, name, "")) => format!("{name} ({key})"),
@@ -568,6 +579,10 @@ mod tests {
     #[test]
     fn parameters_are_titled_with_names_and_units() {
         assert_eq!(parameter_title("process.temperature"), "temperature (°C)");
+        assert_eq!(
+            parameter_title("tools.temperature"),
+            "tool temperature (°C)"
+        );
         assert_eq!(
             parameter_title("process.blank_holder_force"),
             "blank-holder force (N)"

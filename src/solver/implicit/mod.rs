@@ -305,6 +305,9 @@ pub fn run(
                 time: state.time,
             });
         }
+        if let Some(plies) = plies.as_mut() {
+            plies.set_frictions(&state.interface_frictions);
+        }
         let couplings = relist_plies(plies.as_mut(), &mut state, false);
         if !couplings.is_empty() {
             layout = self::layout(model, settings, &couplings)?;
