@@ -14,8 +14,9 @@ use super::air::AirExchange;
 use super::column::{
     step_column, ColumnGrid, ColumnLayer, ColumnScratch, ColumnStep, FaceExchange,
 };
+use super::crystallisation::latent_heat_release;
 use super::in_plane::{add_heat_rates, stable_step, CellConduction};
-use super::properties::{Table, ThermalProperties, HEAT_TRANSFER_UNIT};
+use super::properties::{ThermalProperties, HEAT_TRANSFER_UNIT};
 use nalgebra::Vector3;
 use rayon::prelude::*;
 
@@ -590,15 +591,19 @@ impl BlankHeat {
                     .kinetics
                     .advance(state.theta[i], before[i], state.temperatures[i], dt)
                     .map_err(|e| error(e.to_string()))?;
-                let dx =
-                    crystal.kinetics.fraction(theta) - crystal.kinetics.fraction(state.theta[i]);
+                let x_old = crystal.kinetics.fraction(state.theta[i]);
+                let x_new = crystal.kinetics.fraction(theta);
                 state.theta[i] = theta;
-                if dx > 0.0 {
+                if x_new > x_old {
                     // the heat stays in the cell, raising it by what the step's capacity says
                     // (the one the heat content is booked with)
-                    let per_area =
-                        self.plies[p].density * self.grids[p].cell_thickness(i - a * cells);
-                    let heat = per_area * crystal.latent_heat * dx;
+                    let per_volume = latent_heat_release(
+                        self.plies[p].density,
+                        crystal.latent_heat,
+                        x_old,
+                        x_new,
+                    );
+                    let heat = per_volume * self.grids[p].cell_thickness(i - a * cells);
                     state.temperatures[i] += heat / capacities[i];
                     released += heat * self.reference_areas[a];
                 }
@@ -778,21 +783,6 @@ impl BlankHeat {
             .as_ref()
             .map(|c| c.frozen_at)
     }
-
-    /// The lowest and highest temperature any of the plies' tables hold (°C).
-    pub fn table_range(&self) -> (f64, f64) {
-        self.plies
-            .iter()
-            .map(|p| p.properties.specific_heat.range())
-            .fold((f64::NEG_INFINITY, f64::INFINITY), |(lo, hi), (a, b)| {
-                (lo.max(a), hi.min(b))
-            })
-    }
-
-    /// The specific-heat table of ply `p`.
-    pub fn specific_heat(&self, p: usize) -> &Table {
-        &self.plies[p].properties.specific_heat
-    }
 }
 
 /// The coldest and hottest cell of the blank and its mean temperature (°C).
@@ -863,7 +853,9 @@ pub fn heat_transfer(w_per_m2_k: f64) -> f64 {
 mod tests {
     use super::*;
     use crate::thermal::crystallisation::Nakamura;
-    use crate::thermal::properties::{Crystallisation, LATENT_HEAT_UNIT, SPECIFIC_HEAT_UNIT};
+    use crate::thermal::properties::{
+        Crystallisation, Table, LATENT_HEAT_UNIT, SPECIFIC_HEAT_UNIT,
+    };
 
     /// A flat blank of `n x n` square cells of `size` mm in z = 0, one ply of an A:B:A stack.
     fn blank(n: usize, size: f64, crystallises: bool) -> (BlankHeat, Vec<Vector3<f64>>) {

@@ -350,17 +350,22 @@ mod tests {
         let mut cells = Vec::new();
         for j in 0..ny {
             for i in 0..nx {
-                let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
-                if quads {
-                    cells.push(vec![a, b, c, d]);
-                } else if (i + j) % 2 == 0 {
-                    cells.extend([vec![a, b, c], vec![a, c, d]]);
-                } else {
-                    cells.extend([vec![a, b, d], vec![b, c, d]]);
-                }
+                let corners = [id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)];
+                push_cell(&mut cells, corners, quads, (i + j) % 2 == 0);
             }
         }
         Mesh { positions, cells }
+    }
+
+    /// The quadrilateral `[a, b, c, d]`, or its two triangles cut along `ac` (`even`) or `bd`.
+    fn push_cell(cells: &mut Vec<Vec<usize>>, [a, b, c, d]: [usize; 4], quads: bool, even: bool) {
+        if quads {
+            cells.push(vec![a, b, c, d]);
+        } else if even {
+            cells.extend([vec![a, b, c], vec![a, c, d]]);
+        } else {
+            cells.extend([vec![a, b, d], vec![b, c, d]]);
+        }
     }
 
     /// A tube of `nx` x `around` cells along x, radius `radius`: a strip periodic across its
@@ -382,14 +387,8 @@ mod tests {
         let mut cells = Vec::new();
         for i in 0..nx {
             for j in 0..around {
-                let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
-                if quads {
-                    cells.push(vec![a, b, c, d]);
-                } else if (i + j) % 2 == 0 {
-                    cells.extend([vec![a, b, c], vec![a, c, d]]);
-                } else {
-                    cells.extend([vec![a, b, d], vec![b, c, d]]);
-                }
+                let corners = [id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)];
+                push_cell(&mut cells, corners, quads, (i + j) % 2 == 0);
             }
         }
         Mesh { positions, cells }
