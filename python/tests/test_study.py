@@ -170,13 +170,15 @@ def test_the_latin_hypercube_example_runs_in_reduced_form(tmp_path):
 
 def test_a_case_interrupted_is_left_to_run_again(tmp_path):
     """Ctrl-C in the process running a case stops it without a result: the case is not
-    finished, not failed, and the study runs it again."""
+    finished, not failed, and the study runs it again. The case runs several seconds on 6 mm
+    cells, so that the interrupt after one second falls inside it (on 10 mm cells it could
+    finish first on an idle machine)."""
     import _thread
     import threading
 
     study = ts.Study(
         HEMISPHERE,
-        parameters={"blank.element_size": [10.0], "output.frames": [0]},
+        parameters={"blank.element_size": [6.0], "output.frames": [0]},
         folder=tmp_path / "out",
     )
     timer = threading.Timer(1.0, _thread.interrupt_main)
