@@ -91,6 +91,7 @@ fn main() {
             ply_faces: &[],
             temperatures: &[],
             bending_rigidities: &[],
+            released: &[],
         };
         // the next increment's first trial: every node a little farther along its way
         let positions: Vec<_> = pressed

@@ -8,6 +8,7 @@
 //! - [`contact`]: rigid tools (triangulated surfaces) and their contact with the blank;
 //! - [`fit`]: identification of material parameters from test curves (`thermostamp fit`);
 //! - [`drape`]: kinematic (pin-jointed net) draping, a quick shear preview before forming;
+//! - [`support`]: gravity, springs and grippers holding the blank;
 //! - [`forming`]: thermo-stamping runs from a scenario file (blank, tools, process);
 //! - [`io`]: readers and writers of the files users hand in and get back;
 //! - [`limits`]: the range of every number a user gives, and how numbers show in messages;
@@ -26,4 +27,5 @@ pub mod material;
 pub mod mesh;
 pub mod solver;
 pub mod study;
+pub mod support;
 pub mod thermal;

@@ -9,6 +9,7 @@ use crate::forming::advice::stop_advice;
 use crate::forming::output::{live_output, products, write_final_results};
 use crate::forming::preflight::implicit_advice;
 use crate::forming::run::{frozen_areas, ply_measures};
+use crate::forming::FormingRecord;
 use crate::forming::{run::FormingRun, FormingModel, Scenario};
 use crate::solver::estimate::RunEstimate;
 use crate::solver::SolverKind;
@@ -191,11 +192,76 @@ fn print_summary(
             ),
         ),
     ]);
+    rows.extend(motion_rows(forming, result));
     if let Some(state) = result.formed_state() {
         rows.extend(ply_rows(forming, state));
         rows.extend(heat_rows(scenario, forming, result, state));
     }
     print_checked_table(&rows, &result.checks, &forming.estimate, files);
+}
+
+/// The stages, the dies' closing force, the sag under gravity before the tools touch and what
+/// the springs and grippers hold; none of them in a single stroke without supports.
+fn motion_rows(forming: &FormingModel, result: &FormingRun) -> Vec<(&'static str, String)> {
+    let mut rows = Vec::new();
+    if !forming.stages.is_empty() {
+        let stages: Vec<String> = forming
+            .stages
+            .iter()
+            .enumerate()
+            .map(|(i, (from, to, travel))| format!("{} {from:.3}-{to:.3} s, {travel:.3} mm", i + 1))
+            .collect();
+        rows.push(("stages", stages.join("; ")));
+    }
+    let records = &result.records;
+    let peak = |f: fn(&FormingRecord) -> f64| records.iter().map(f).fold(0.0, f64::max);
+    if forming.punch_path.is_some() || !forming.stages.is_empty() {
+        rows.push((
+            "peak die closing force",
+            format!("{:.2} N", peak(|r| r.die_force)),
+        ));
+    }
+    let supports = &forming.model.supports;
+    if supports.gravity.is_some() {
+        rows.push(("sag before the tools touch", sag_before_contact(records)));
+    }
+    if let Some(last) = records.last() {
+        if !supports.springs.is_empty() {
+            rows.push((
+                "springs",
+                format!(
+                    "{} holding {:.3} N at the end, {:.3} N at most",
+                    supports.springs.len(),
+                    last.supports.springs,
+                    peak(|r| r.supports.springs)
+                ),
+            ));
+        }
+        if !supports.grippers.is_empty() {
+            rows.push((
+                "grippers",
+                format!(
+                    "{} holding {:.3} N at the end, {:.3} N at most",
+                    supports.grippers.len(),
+                    last.supports.grippers,
+                    peak(|r| r.supports.grippers)
+                ),
+            ));
+        }
+    }
+    rows
+}
+
+/// The blank's sag at the last record before any tool touched it.
+fn sag_before_contact(records: &[FormingRecord]) -> String {
+    let free = records
+        .iter()
+        .take_while(|r| r.punch_force.abs() + r.holder_force.abs() + r.die_force.abs() == 0.0)
+        .last();
+    match free {
+        Some(r) => format!("{:.3} mm (at {:.3} s)", r.supports.sag, r.time),
+        None => "the tools touch the blank from the start".into(),
+    }
 }
 
 /// A layup's row per ply: its largest shear angle, how far it slid over its neighbours, its

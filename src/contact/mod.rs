@@ -11,6 +11,7 @@ pub mod rigid_tool;
 pub mod stl;
 pub mod surface;
 pub mod swept_profile;
+pub mod tool_path;
 pub mod tools;
 
 pub use blended_surface::{BlendedDistance, BlendedSurface};
@@ -19,8 +20,10 @@ pub use rigid_tool::{NearTriangles, RigidTool, ToolMotion};
 pub use stl::{parse_stl, read_stl, write_stl_ascii, write_stl_binary, StlError};
 pub use surface::{closest_point_on_triangle, Facing, Footing, Projection, TriangleSurface};
 pub use swept_profile::{ProfilePiece, SurfacePoint, SweptProfile};
+pub use tool_path::ToolPath;
 pub use tools::{
     blank_holder, distance_from_ridge, double_dome_die, double_dome_die_shape, double_dome_holder,
-    double_dome_holder_shape, double_dome_punch, double_dome_punch_shape, hemisphere_die,
-    hemisphere_punch, hemisphere_punch_with_skirt, DieShape,
+    double_dome_holder_shape, double_dome_matched_die, double_dome_matched_die_shape,
+    double_dome_punch, double_dome_punch_shape, hemisphere_die, hemisphere_punch,
+    hemisphere_punch_with_skirt, DieShape, MatchedDie,
 };

@@ -14,6 +14,7 @@ use super::surface::{
     TriangleSurface,
 };
 use super::swept_profile::SweptProfile;
+use super::tool_path::ToolPath;
 use nalgebra::Vector3;
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -27,6 +28,8 @@ pub enum ToolMotion {
     Fixed,
     /// Prescribed velocity history.
     Velocity(ToolVelocity),
+    /// Moved along a path: each step translates it by exactly the path's travel over the step.
+    Path(Arc<ToolPath>),
     /// Pushed by a constant `force` (N), free to move along it, resisted by the blank only: a
     /// blank holder under its blank-holder force. `mass` (tonne) is the tool's inertia in the
     /// simulation; the blank's mass or more keeps the tool stable on the contact springs. Its
@@ -44,6 +47,7 @@ impl std::fmt::Debug for ToolMotion {
         match self {
             ToolMotion::Fixed => write!(f, "Fixed"),
             ToolMotion::Velocity(_) => write!(f, "Velocity(..)"),
+            ToolMotion::Path(p) => write!(f, "Path({p:?})"),
             ToolMotion::Force { force, mass } => {
                 write!(f, "Force {{ force: {force:?}, mass: {mass} }}")
             }
@@ -209,6 +213,7 @@ impl RigidTool {
         match &self.motion {
             ToolMotion::Fixed => Vector3::zeros(),
             ToolMotion::Velocity(v) => v(t),
+            ToolMotion::Path(p) => p.mean_velocity(t, dt),
             ToolMotion::Force { force, mass } => {
                 // only along the applied force: a holder slides along the stroke axis
                 let axis = force.normalize();

@@ -6,7 +6,8 @@
 //! - The stroke axis is `z`. The blank lies initially in the plane `z = 0`, centred on the axis.
 //! - The **punch** is below the blank (`z <= 0`) and moves up (`+z`); its apex touches `z = 0`.
 //! - The **die** is above the blank (`z >= 0`): its flat underside lies in `z = 0` and its hole
-//!   goes up, so the punch pushes the blank into it.
+//!   goes up, so the punch pushes the blank into it. A *matched* die instead closes on the
+//!   punch: a cavity the punch fills with a uniform gap at the end of its stroke.
 //! - The **blank holder** is below the blank, around the punch: a flat annulus in `z = 0`.
 //! - Every surface is placed touching the blank's *mid-plane*; the forming driver translates the
 //!   tools by half the blank thickness (and the clearance) before a run.
@@ -162,6 +163,164 @@ fn die_shape(tool: &str, half_length: f64, die: &DieShape) -> Result<SweptProfil
         die_profile(opening_radius, fillet_radius, outer_radius, depth),
         half_length,
     ))
+}
+
+/// Tool name in the matched die's messages.
+const MATCHED_DIE: &str = "double_dome_matched_die";
+
+/// The sizes of a matched die: see [`double_dome_matched_die`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MatchedDie {
+    /// Radius `R` of the punch's crown (of [`double_dome_punch`]) the die is matched to.
+    pub punch_radius: f64,
+    /// Uniform gap `g` between punch and cavity at closure: the blank's thickness and clearance.
+    pub gap: f64,
+    /// Radius `Rf` of the fillet between the plate and the cavity.
+    pub fillet_radius: f64,
+    /// Distance of the plate's outer rim from the ridge (from the axis).
+    pub outer_radius: f64,
+    /// Travel `S` of the punch up the stroke axis, from its apex at `z = 0`, at closure.
+    pub closed_travel: f64,
+}
+
+/// Matched (female) die of the double-dome punch (of the hemisphere punch for
+/// `half_length = 0`): the cavity the punch of radius `R` fills with the uniform gap `g` once it
+/// has travelled `S` up the stroke axis, so that the blank is formed between two tools rather
+/// than drawn into an open hole. It is the punch's crown offset by `g`: at closure the crown's
+/// centre line lies at `z = S - R`, so the cavity's cap is the offset at distance `R + g` from
+/// that line, its top at `z = S + g`, and below the crown's equator a wall at distance `R + g`
+/// from the ridge faces the punch's skirt.
+///
+/// Around the cavity, a flat plate in `z = 0` runs in from `outer_radius`, rounded into the
+/// cavity by a fillet of radius `Rf` (a convex edge seen from the blank, centre line at
+/// `z = Rf`) tangent to the plate:
+///
+/// - *deep* (`S - R > Rf`): the fillet turns through 90° into the wall, which rises from
+///   `z = Rf` to the equator `z = S - R`, where the cap begins;
+/// - *shallow* (`S - R <= Rf`): the equator is too low for a wall, and the fillet is tangent to
+///   the cap itself, its centre line at distance `R + g + Rf` from the cap's.
+///
+/// Every joint is tangent (C1). Normals point down on the plate and into the cavity elsewhere,
+/// towards the blank. The fillet lies outside the cap's offset, so at closure no point of the
+/// punch is nearer to the die than `g`.
+///
+/// The cap turns through `90° - a`, `a` the angle of the fillet's tangency above the equator
+/// (0 when deep); it has a top above the rim exactly when `S + g > 0`, which positive sizes
+/// ensure, so a size is refused only when it is not positive and finite, when `S + g` is too
+/// small against `R + Rf` for the cap to turn at all in floating point, or when
+/// `outer_radius` does not reach beyond the fillet's start on the plate.
+pub fn double_dome_matched_die(
+    half_length: f64,
+    die: &MatchedDie,
+    resolution: f64,
+) -> Result<TriangleSurface, String> {
+    let shape = double_dome_matched_die_shape(half_length, die)?;
+    triangulated(MATCHED_DIE, &shape, resolution)
+}
+
+/// The exact surface of [`double_dome_matched_die`].
+pub fn double_dome_matched_die_shape(
+    half_length: f64,
+    die: &MatchedDie,
+) -> Result<SweptProfile, String> {
+    check_non_negative(MATCHED_DIE, "half_length", half_length)?;
+    let rim = checked_cavity_rim(die)?;
+    Ok(SweptProfile::new(
+        matched_die_profile(die, &rim),
+        half_length,
+    ))
+}
+
+/// Where the fillet of a matched die sits: what the cases of [`double_dome_matched_die`] change.
+#[derive(Clone, Copy, Debug)]
+struct CavityRim {
+    /// Distance of the fillet's centre line from the ridge: where the fillet leaves the plate.
+    fillet_r: f64,
+    /// Angle (rad) of the fillet's tangency with the cap, above the cap centre's level: 0 when
+    /// the fillet meets a wall.
+    cap_from: f64,
+}
+
+/// The rim of `die`'s cavity, or the reason the sizes make none.
+fn checked_cavity_rim(die: &MatchedDie) -> Result<CavityRim, String> {
+    check_positive(MATCHED_DIE, "punch_radius", die.punch_radius)?;
+    check_positive(MATCHED_DIE, "gap", die.gap)?;
+    check_positive(MATCHED_DIE, "fillet_radius", die.fillet_radius)?;
+    check_positive(MATCHED_DIE, "outer_radius", die.outer_radius)?;
+    check_positive(MATCHED_DIE, "closed_travel", die.closed_travel)?;
+    let rim = cavity_rim(die);
+    if rim.cap_from >= FRAC_PI_2 {
+        return Err(format!(
+            "{MATCHED_DIE}: closed_travel + gap ({}) must be large enough against \
+             punch_radius + fillet_radius ({}) for the cavity to rise above its rim",
+            die.closed_travel + die.gap,
+            die.punch_radius + die.fillet_radius
+        ));
+    }
+    if die.outer_radius <= rim.fillet_r {
+        return Err(format!(
+            "{MATCHED_DIE}: outer_radius ({}) must exceed the distance at which the fillet \
+             leaves the plate ({})",
+            die.outer_radius, rim.fillet_r
+        ));
+    }
+    Ok(rim)
+}
+
+/// The fillet's place. Deep, it meets the wall at the cap's level `a = 0`, its centre line at
+/// `R + g + Rf`. Shallow, its centre line lies `drop = Rf - (S - R) >= 0` above the cap's and
+/// `R + g + Rf` from it, hence at `sqrt((R + g + Rf)^2 - drop^2)` from the ridge; the
+/// difference of squares is factored, `R + g + Rf - drop = S + g`, so that a small `S + g`
+/// keeps its digits.
+fn cavity_rim(die: &MatchedDie) -> CavityRim {
+    let reach = die.punch_radius + die.gap + die.fillet_radius;
+    let drop = die.fillet_radius - (die.closed_travel - die.punch_radius);
+    if drop <= 0.0 {
+        return CavityRim {
+            fillet_r: reach,
+            cap_from: 0.0,
+        };
+    }
+    let fillet_r = ((die.closed_travel + die.gap) * (reach + drop)).sqrt();
+    CavityRim {
+        fillet_r,
+        cap_from: drop.atan2(fillet_r),
+    }
+}
+
+/// Matched die profile from the outer rim inward: the plate along `z = 0`, the fillet (angle
+/// from -90° down to `a - 180°` about its centre), the wall up when deep, then the cap (angle
+/// from `a` up to 90° about `(0, S - R)`), ending on the ridge at the cavity's top. Going inward
+/// and up puts the left normal down on the plate and into the cavity (towards the cap's centre)
+/// after it, as in [`die_profile`].
+fn matched_die_profile(die: &MatchedDie, rim: &CavityRim) -> Vec<ProfilePiece> {
+    let cavity = die.punch_radius + die.gap;
+    let (fillet, equator) = (die.fillet_radius, die.closed_travel - die.punch_radius);
+    let mut pieces = vec![
+        ProfilePiece::Line {
+            from: [die.outer_radius, 0.0],
+            to: [rim.fillet_r, 0.0],
+        },
+        ProfilePiece::Arc {
+            centre: [rim.fillet_r, fillet],
+            radius: fillet,
+            from: -FRAC_PI_2,
+            to: rim.cap_from - PI,
+        },
+    ];
+    if equator > fillet {
+        pieces.push(ProfilePiece::Line {
+            from: [cavity, fillet],
+            to: [cavity, equator],
+        });
+    }
+    pieces.push(ProfilePiece::Arc {
+        centre: [0.0, equator],
+        radius: cavity,
+        from: rim.cap_from,
+        to: FRAC_PI_2,
+    });
+    pieces
 }
 
 /// Blank holder: the flat annulus `inner_radius <= r <= outer_radius` in `z = 0`, below the
@@ -650,5 +809,221 @@ mod tests {
     fn absurd_resolution_is_an_error_not_an_allocation() {
         let e = hemisphere_punch(50.0, 1e-300).unwrap_err();
         assert!(e.contains("resolution"), "{e}");
+    }
+
+    /// Punch radius, gap and fillet radius of the matched dies below.
+    const R: f64 = 50.0;
+    const GAP: f64 = 1.5;
+    const FILLET: f64 = 8.0;
+    /// Travels at closure: deep (`S - R = 25 > Rf`, a wall from `z = 8` to 25) and shallow
+    /// (`S < R`: the fillet meets the cap, whose centre is below the plate).
+    const DEEP: f64 = 75.0;
+    const SHALLOW: f64 = 30.0;
+
+    fn matched(closed_travel: f64) -> MatchedDie {
+        MatchedDie {
+            punch_radius: R,
+            gap: GAP,
+            fillet_radius: FILLET,
+            outer_radius: 120.0,
+            closed_travel,
+        }
+    }
+
+    /// The point of a surface swept around the ridge of `l` at profile point `(r, z)` and ring
+    /// parameter `u` (see `ring`).
+    fn swept_point(l: f64, [r, z]: [f64; 2], u: f64) -> Vector3<f64> {
+        let f = u.fract();
+        let (x, y) = match u as usize {
+            0 => (
+                l + r * (PI * f - FRAC_PI_2).cos(),
+                r * (PI * f - FRAC_PI_2).sin(),
+            ),
+            1 => (l - 2.0 * l * f, r),
+            2 => (
+                -l + r * (PI * f + FRAC_PI_2).cos(),
+                r * (PI * f + FRAC_PI_2).sin(),
+            ),
+            _ => (-l + 2.0 * l * f, -r),
+        };
+        Vector3::new(x, y, z)
+    }
+
+    /// At closure every point of the punch's exact surface (crown and skirt, moved up by `S`)
+    /// lies at least `g` in front of the die, and exactly `g` wherever it faces the cap or the
+    /// wall, which includes everything above the fillet's centre line `z = Rf`.
+    #[test]
+    fn at_closure_the_gap_to_the_punch_is_uniform() {
+        for half_length in [0.0, 30.0] {
+            for travel in [DEEP, SHALLOW] {
+                let die = double_dome_matched_die_shape(half_length, &matched(travel)).unwrap();
+                let punch = double_dome_punch_shape(half_length, R, 40.0).unwrap();
+                let mut facing = 0;
+                for piece in punch.pieces() {
+                    for i in 0..=60 {
+                        let [r, z] = piece.point_at(i as f64 / 60.0);
+                        for u in [0.0, 0.35, 1.5, 2.8, 3.6] {
+                            let p = swept_point(half_length, [r, z + travel], u);
+                            let d = die.nearest(&p).distance;
+                            let case = format!("l = {half_length}, S = {travel}, {p}");
+                            assert!(d > GAP - 1e-9, "{case}: {d}");
+                            if z + travel >= FILLET {
+                                assert!((d - GAP).abs() < 1e-9, "{case}: {d}");
+                                facing += 1;
+                            }
+                        }
+                    }
+                }
+                assert!(facing >= 100, "{facing}");
+            }
+        }
+    }
+
+    /// Unit tangent of a piece at its start or finish, in its direction.
+    fn tangent(piece: &ProfilePiece, at_finish: bool) -> [f64; 2] {
+        match *piece {
+            ProfilePiece::Line { from, to } => {
+                let length = (to[0] - from[0]).hypot(to[1] - from[1]);
+                [(to[0] - from[0]) / length, (to[1] - from[1]) / length]
+            }
+            ProfilePiece::Arc { from, to, .. } => {
+                let a = if at_finish { to } else { from };
+                let s = (to - from).signum();
+                [-s * a.sin(), s * a.cos()]
+            }
+        }
+    }
+
+    /// Consecutive pieces share their end points and tangents, deep, at the switch between
+    /// the cases (`S = R + Rf`), shallow, and very shallow (cap centre far below the plate);
+    /// the profile runs from the plate's rim to the cavity's top on the axis.
+    #[test]
+    fn the_matched_die_profile_is_tangent_continuous() {
+        for (travel, pieces) in [(DEEP, 4), (R + FILLET, 3), (SHALLOW, 3), (2.0, 3)] {
+            let shape = double_dome_matched_die_shape(0.0, &matched(travel)).unwrap();
+            let p = shape.pieces();
+            assert_eq!(p.len(), pieces, "S = {travel}");
+            assert_eq!(p[0].start(), [120.0, 0.0]);
+            assert_eq!(p[p.len() - 1].finish(), [0.0, travel + GAP]);
+            for pair in p.windows(2) {
+                let (a, b) = (pair[0].finish(), pair[1].start());
+                assert!(
+                    (a[0] - b[0]).hypot(a[1] - b[1]) < 1e-12,
+                    "S = {travel}: {a:?} {b:?}"
+                );
+                let (ta, tb) = (tangent(&pair[0], true), tangent(&pair[1], false));
+                assert!((ta[0] - tb[0]).hypot(ta[1] - tb[1]) < 1e-12, "S = {travel}");
+            }
+        }
+    }
+
+    /// The exact normal is `-z` at the cavity's top and on the plate, and every triangle of
+    /// the mesh faces the same way as the exact surface at its centroid.
+    #[test]
+    fn matched_die_normals_point_down_and_into_the_cavity() {
+        for half_length in [0.0, 30.0] {
+            for travel in [DEEP, SHALLOW] {
+                let sizes = matched(travel);
+                let shape = double_dome_matched_die_shape(half_length, &sizes).unwrap();
+                let below_top = Vector3::new(0.5 * half_length, 0.0, travel + GAP - 1.0);
+                let top = shape.nearest(&below_top);
+                assert!((top.normal + Vector3::z()).norm() < 1e-12, "{}", top.normal);
+                assert!((top.distance - 1.0).abs() < 1e-12);
+                let plate = shape.nearest(&Vector3::new(half_length, 110.0, -0.5));
+                assert!(
+                    (plate.normal + Vector3::z()).norm() < 1e-12,
+                    "{}",
+                    plate.normal
+                );
+                assert!((plate.distance - 0.5).abs() < 1e-12);
+                let mesh = double_dome_matched_die(half_length, &sizes, 2.0).unwrap();
+                for (k, t) in mesh.triangles.iter().enumerate() {
+                    let [a, b, c] = t.map(|i| mesh.vertices[i]);
+                    let exact = shape.nearest(&((a + b + c) / 3.0)).normal;
+                    assert!(mesh.normal(k).dot(&exact) > 0.9, "triangle {k}");
+                }
+            }
+        }
+    }
+
+    /// Sizes that make no cavity are refused, naming what is wrong; the least outer radius
+    /// beyond the fillet is accepted.
+    #[test]
+    fn matched_die_sizes_without_a_cavity_are_refused() {
+        let deep = matched(DEEP);
+        let cases = [
+            (
+                MatchedDie {
+                    punch_radius: 0.0,
+                    ..deep
+                },
+                "punch_radius must be positive",
+            ),
+            (MatchedDie { gap: -1.0, ..deep }, "gap must be positive"),
+            (
+                MatchedDie {
+                    fillet_radius: f64::NAN,
+                    ..deep
+                },
+                "fillet_radius must be positive",
+            ),
+            (
+                MatchedDie {
+                    outer_radius: 0.0,
+                    ..deep
+                },
+                "outer_radius must be positive",
+            ),
+            (
+                MatchedDie {
+                    closed_travel: 0.0,
+                    ..deep
+                },
+                "closed_travel must be positive",
+            ),
+            (
+                MatchedDie {
+                    closed_travel: f64::INFINITY,
+                    ..deep
+                },
+                "closed_travel must be positive",
+            ),
+            (
+                MatchedDie {
+                    outer_radius: 59.5,
+                    ..deep
+                },
+                "outer_radius (59.5) must exceed",
+            ),
+            (
+                MatchedDie {
+                    outer_radius: 52.0,
+                    ..matched(SHALLOW)
+                },
+                "outer_radius (52) must exceed",
+            ),
+            (
+                MatchedDie {
+                    closed_travel: 1e-300,
+                    gap: 1e-300,
+                    ..deep
+                },
+                "cavity to rise above",
+            ),
+        ];
+        for (sizes, message) in cases {
+            let e = double_dome_matched_die_shape(0.0, &sizes).unwrap_err();
+            assert!(e.starts_with("double_dome_matched_die: "), "{e}");
+            assert!(e.contains(message), "{e}");
+        }
+        let e = double_dome_matched_die_shape(-1.0, &deep).unwrap_err();
+        assert!(e.contains("half_length must be zero or positive"), "{e}");
+        let e = double_dome_matched_die(0.0, &deep, 0.0).unwrap_err();
+        assert!(e.contains("resolution must be positive"), "{e}");
+        let fits = MatchedDie {
+            outer_radius: 59.5 + 1e-9,
+            ..deep
+        };
+        assert!(double_dome_matched_die_shape(0.0, &fits).is_ok());
     }
 }

@@ -24,7 +24,7 @@ pub fn stop_advice(
     if let Some(place) = where_it_stalled(forming, run, worst_nodes) {
         lines.push(place);
     }
-    let stroke = scenario.process.stroke;
+    let stroke = forming.stroke;
     let travel = forming.max_increment * forming.punch.speed;
     lines.push(format!(
         "shorter increments: process.max_increment = {} (now {} mm of the {stroke} mm stroke)",

@@ -6,12 +6,15 @@ pub mod drape_preview;
 pub mod export;
 pub mod heat;
 pub mod layup;
+pub mod motion;
+pub mod motion_setup;
 pub mod output;
 pub mod pictures;
 pub mod preflight;
 pub mod run;
 pub mod scenario;
 pub mod setup;
+pub mod supports;
 
 pub use run::{FormingRecord, FormingRun, Wrinkles};
 pub use scenario::{Scenario, ScenarioError};

@@ -22,7 +22,7 @@ pub const SERIES: &str = "forming";
 
 /// The history's columns. `time` is process time, the solver's `solver_time` times
 /// `process.time_scaling`, as the frames' times are.
-pub const HISTORY_COLUMNS: [&str; 23] = [
+pub const HISTORY_COLUMNS: [&str; 27] = [
     "time",
     "stroke",
     "punch_force",
@@ -45,11 +45,15 @@ pub const HISTORY_COLUMNS: [&str; 23] = [
     "temperature_mean",
     "temperature_max",
     "frozen_area",
+    "die_force",
+    "spring_force",
+    "gripper_force",
+    "sag",
     "solver_time",
 ];
 
 /// One record as a row of [`HISTORY_COLUMNS`].
-pub fn history_row(r: &FormingRecord, time_scaling: f64) -> [f64; 23] {
+pub fn history_row(r: &FormingRecord, time_scaling: f64) -> [f64; 27] {
     let e = &r.energies;
     [
         r.time * time_scaling,
@@ -74,6 +78,10 @@ pub fn history_row(r: &FormingRecord, time_scaling: f64) -> [f64; 23] {
         r.temperature.mean,
         r.temperature.max,
         r.frozen_area,
+        r.die_force,
+        r.supports.springs,
+        r.supports.grippers,
+        r.supports.sag,
         r.time,
     ]
 }

@@ -61,12 +61,7 @@ pub fn write_pictures(
     let Some(state) = result.formed_state() else {
         return Ok(pictures);
     };
-    let run = run_line(
-        scenario,
-        forming,
-        forming.punch.displacement(state.time),
-        stopped,
-    );
+    let run = run_line(scenario, forming, forming.punch_travel(state.time), stopped);
     let outlines = tool_outlines(forming, state);
     let locking = scenario.output.locking_angle;
     let mut maps = vec![
@@ -117,7 +112,7 @@ pub fn run_line(
         (None, None) => "no holder".to_string(),
     };
     let stroke = if stopped {
-        format!("stroke {reached:.2} of {} mm (stopped)", p.stroke)
+        format!("stroke {reached:.2} of {} mm (stopped)", forming.stroke)
     } else {
         format!("stroke {reached:.1} mm")
     };
@@ -485,7 +480,7 @@ fn tool_outlines(forming: &FormingModel, state: &State) -> Vec<Outline> {
     });
     let punch = placed(forming.punch_tool);
     let (bottom, nose) = levels(&punch);
-    let travel = forming.punch.displacement(state.time);
+    let travel = forming.punch_travel(state.time);
     outlines.push(Outline {
         label: "punch in the die face",
         inside_part: true,

@@ -38,6 +38,42 @@ pub struct FormingRecord {
     /// run) and the area where a layer has frozen (mm²).
     pub temperature: FieldExtremes,
     pub frozen_area: f64,
+    /// Force of the blank on the die along `+z`, against its closing (N): what holds a pair of
+    /// matched dies closed.
+    pub die_force: f64,
+    /// The springs', grippers' and gravity's share ([`SupportRecord`]).
+    pub supports: SupportRecord,
+}
+
+/// What the springs and grippers hold and how far the blank sags.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SupportRecord {
+    /// Sum of the magnitudes of the springs' and of the grippers' resultants on the blank (N).
+    pub springs: f64,
+    pub grippers: f64,
+    /// Largest displacement of a node along gravity from where it started (mm); 0 without
+    /// gravity.
+    pub sag: f64,
+}
+
+/// The supports' record of `state`.
+pub fn support_record(model: &Model, state: &State) -> SupportRecord {
+    let loads = &state.supports.loads;
+    let total = |forces: &[Vector3<f64>]| forces.iter().map(|f| f.norm()).sum();
+    let sag = model.supports.gravity.map_or(0.0, |g| {
+        let down = g.acceleration.normalize();
+        state
+            .positions
+            .iter()
+            .zip(&model.mesh.nodes)
+            .map(|(x, x0)| (x - x0).dot(&down))
+            .fold(0.0, f64::max)
+    });
+    SupportRecord {
+        springs: total(&loads.springs),
+        grippers: total(&loads.grippers),
+        sag,
+    }
 }
 
 /// A finished (or stopped) forming run.
@@ -119,7 +155,7 @@ impl Observer for Recorder<'_, '_, '_> {
         let punch_force = self.punch_force(state);
         self.records.push(FormingRecord {
             time: state.time,
-            stroke: f.punch.displacement(state.time),
+            stroke: f.punch_travel(state.time),
             punch_force,
             holder_force: holder.map_or(0.0, |h| state.tool_loads[h].normal_force),
             holder_travel: holder.map_or(0.0, |h| state.tool_translations[h].z),
@@ -129,6 +165,8 @@ impl Observer for Recorder<'_, '_, '_> {
             energies: state.energies,
             temperature: temperature_extremes(model, state),
             frozen_area: frozen_area(model, state),
+            die_force: state.tool_loads[f.die_tool].force.z,
+            supports: support_record(model, state),
         });
         self.steps = state.step;
         self.last_recorded = Some(state.clone());

@@ -3,6 +3,8 @@
 //! be overridden from the command line (`--set process.temperature=310`).
 
 use super::heat::{heat_scenario, HeatScenario, ThermalTable, ToolTemperatures};
+use super::motion::{MotionTable, Stage};
+use super::supports::{GripperTable, SpringTable, SupportScenario};
 use crate::contact::ply_contact::FilmFriction;
 use crate::io::{from_toml_text, from_toml_value};
 use crate::limits::{
@@ -29,6 +31,10 @@ pub struct Scenario {
     /// The blank's temperature field of a non-isothermal run; `None`: isothermal at
     /// `process.temperature`.
     pub heat: Option<HeatScenario>,
+    /// Each tool's own `motion` table (punch, die, holder), where given.
+    pub motions: [Option<MotionTable>; 3],
+    /// Springs, grippers and gravity.
+    pub supports: SupportScenario,
 }
 
 /// The blank: one ply of one material card, or a layup of plies, either a rectangle meshed
@@ -833,6 +839,7 @@ struct ToolTable {
     file: Option<PathBuf>,
     element_set: Option<String>,
     temperature: Option<f64>,
+    motion: Option<MotionTable>,
 }
 
 impl ToolTable {
@@ -875,6 +882,11 @@ impl ToolsTable {
             holder_inner_radius: self.holder_inner_radius,
             shape,
         }))
+    }
+
+    /// The tools' `motion` tables (punch, die, holder).
+    fn motions(&self) -> [Option<MotionTable>; 3] {
+        [&self.punch, &self.die, &self.holder].map(|t| t.as_ref().and_then(|t| t.motion.clone()))
     }
 
     /// The tools' `temperature` keys.
@@ -938,9 +950,19 @@ pub struct Process {
     /// stroke (s); see [`Scenario::heat`].
     pub blank_temperature: Option<f64>,
     pub transfer_time: Option<f64>,
-    /// Punch travel (mm) and physical punch speed (mm/s).
+    /// Punch travel (mm) and physical punch speed (mm/s) of the single stroke; not given where
+    /// stages or the punch's own motion table move the tools (then the punch's travel and top
+    /// speed, filled in when the model is built).
+    #[serde(default = "unset")]
     pub stroke: f64,
+    #[serde(default = "unset")]
     pub punch_speed: f64,
+    /// The press's stages, one after the other; none: the single stroke.
+    #[serde(default)]
+    pub stages: Vec<Stage>,
+    /// Gravity (mm/s^2); standard gravity along -z where the blank hangs on springs or
+    /// grippers, none otherwise.
+    pub gravity: Option<[f64; 3]>,
     /// Blank-holder force (N): the holder pushes the flange against the die with it, free to
     /// move along the stroke. 0 (the default) leaves the holder out, unless a gap is given.
     #[serde(default)]
@@ -971,6 +993,11 @@ fn one() -> f64 {
 /// A key not given: told apart from any value given.
 fn unset() -> f64 {
     f64::NAN
+}
+
+/// A number key's value where given ([`unset`] where not).
+fn given(value: f64) -> Option<f64> {
+    (!value.is_nan()).then_some(value)
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
@@ -1037,6 +1064,10 @@ struct ScenarioFile {
     thermal: Option<ThermalTable>,
     #[serde(default)]
     output: Output,
+    #[serde(default)]
+    springs: Vec<SpringTable>,
+    #[serde(default)]
+    grippers: Vec<GripperTable>,
 }
 
 /// The temperature the run's once-evaluated tables are taken at: `process.temperature`, or in a
@@ -1109,6 +1140,7 @@ impl Scenario {
             has_holder,
         )
         .map_err(error)?;
+        let motions = file.tools.motions();
         let scenario = Scenario {
             origin: origin.to_string(),
             blank: file
@@ -1117,6 +1149,12 @@ impl Scenario {
                 .map_err(error)?,
             boundary: file.boundary,
             tools: file.tools.resolve(folder).map_err(error)?,
+            motions,
+            supports: SupportScenario {
+                springs: file.springs,
+                grippers: file.grippers,
+                gravity: process.gravity,
+            },
             process,
             output: file.output,
             heat,
@@ -1239,8 +1277,8 @@ impl Scenario {
         let mut given = vec![
             ("blank.ply_angle", Some(self.blank.ply_angle), ANGLE),
             ("process.temperature", Some(p.temperature), TEMPERATURE),
-            ("process.stroke", Some(p.stroke), LENGTH),
-            ("process.punch_speed", Some(p.punch_speed), SPEED),
+            ("process.stroke", given(p.stroke), LENGTH),
+            ("process.punch_speed", given(p.punch_speed), SPEED),
             (
                 "process.blank_holder_force",
                 Some(p.blank_holder_force),
@@ -1314,7 +1352,40 @@ impl Scenario {
         Ok(())
     }
 
+    /// Whether stages or the punch's own motion table move the punch, not the single stroke.
+    pub fn moves_by_paths(&self) -> bool {
+        let punch_path = self.motions[0]
+            .as_ref()
+            .is_some_and(|m| m.displacement.is_some() || m.speed.is_some());
+        !self.process.stages.is_empty() || punch_path
+    }
+
+    /// `process.stroke` and `punch_speed` for the single stroke, and only for it.
+    fn check_stroke_keys(&self) -> Result<(), String> {
+        let p = &self.process;
+        for (key, value) in [
+            ("process.stroke", p.stroke),
+            ("process.punch_speed", p.punch_speed),
+        ] {
+            match (self.moves_by_paths(), value.is_nan()) {
+                (true, false) => {
+                    return Err(format!(
+                        "{key} is for the single stroke; here process.stages (or                          tools.punch.motion) move the punch: leave {key} out"
+                    ))
+                }
+                (false, true) => {
+                    return Err(format!(
+                        "{key} is needed (or process.stages, or tools.punch.motion, to move                          the tools)"
+                    ))
+                }
+                _ => {}
+            }
+        }
+        Ok(())
+    }
+
     fn check_process(&self) -> Result<(), String> {
+        self.check_stroke_keys()?;
         let p = &self.process;
         if p.solver == SolverKind::Implicit {
             let explicit_only = [

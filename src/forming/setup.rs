@@ -8,12 +8,15 @@
 
 use super::export::FORMED_INP;
 use super::layup;
+use super::motion_setup::{apply_motions, planned_stroke, tool_names};
 use super::preflight;
 use super::scenario::{BlankShape, Scenario, SetKind, ToolFile, ToolFiles, ToolSet, Tools};
+use super::supports::build_supports;
 use crate::contact::{
     distance_from_ridge, double_dome_die, double_dome_die_shape, double_dome_holder,
     double_dome_holder_shape, double_dome_punch, double_dome_punch_shape, read_stl,
-    ContactSettings, DieShape, Facing, RigidTool, SweptProfile, ToolMotion, TriangleSurface,
+    ContactSettings, DieShape, Facing, RigidTool, SweptProfile, ToolMotion, ToolPath,
+    TriangleSurface,
 };
 use crate::experiment::sheet_test::Crosshead;
 use crate::limits::{shown, shown_apart};
@@ -38,7 +41,7 @@ const DIE: usize = 1;
 
 /// The holder's inertia in blank masses: heavy enough to stay stable on the contact springs of
 /// every node it touches, light enough to follow the flange.
-const HOLDER_MASS_RATIO: f64 = 10.0;
+pub(super) const HOLDER_MASS_RATIO: f64 = 10.0;
 
 /// A blank node may start this far (in ply thicknesses) inside a tool read from a file before
 /// the placement is refused: the contact would fling it out at the first step.
@@ -49,6 +52,13 @@ pub struct FormingModel {
     pub model: Model,
     pub card: MaterialCard,
     pub punch: Crosshead,
+    /// The punch's path where stages or its own motion table move it (then `punch` holds its
+    /// top speed and a ramp for the explicit run's checks only).
+    pub punch_path: Option<Arc<ToolPath>>,
+    /// The punch's whole travel (mm): `process.stroke`, or its path's.
+    pub stroke: f64,
+    /// Each stage's start and end (s) and travel (mm), where the scenario has stages.
+    pub stages: Vec<(f64, f64, f64)>,
     pub settings: SolverSettings,
     /// Which solver runs the model (`process.solver`); the implicit one takes the end time and
     /// output interval of `settings`.
@@ -99,7 +109,7 @@ impl FormingModel {
             .flat_map(|l| &l.plies)
             .any(|p| p.shape.is_some());
         let keyed = preflight::BlankSize::of_rectangle(s)
-            .filter(|_| !own_outlines)
+            .filter(|_| !own_outlines && !s.moves_by_paths())
             .map(|b| b.times(plies));
         if let Some(size) = keyed {
             early(&preflight::estimate_from_keys(s, &card, size)?);
@@ -114,7 +124,7 @@ impl FormingModel {
             BlankShape::File { .. } => mesh.element_size(),
         };
         let meshes = ply_meshes(s, mesh, &mut notes)?;
-        if keyed.is_none() {
+        if keyed.is_none() && !s.moves_by_paths() {
             early(&preflight::estimate_from_keys(
                 s,
                 &card,
@@ -168,16 +178,27 @@ impl FormingModel {
             model = model.with_bending(rigidity).map_err(|e| e.to_string())?;
             notes.extend(soft_bending_note(s));
         }
-        let simulated = p.punch_speed * p.time_scaling;
-        let punch = Crosshead {
+        let single = !s.moves_by_paths();
+        let simulated = match single {
+            true => p.punch_speed * p.time_scaling,
+            false => 1.0,
+        };
+        let mut punch = Crosshead {
             speed: simulated,
             ramp_time: 0.05 * p.stroke / simulated,
         };
-        let (tools, holder_tool) = match &s.tools {
+        let (mut tools, holder_tool) = match &s.tools {
             ToolSet::BuiltIn(t) => built_in_tool_set(s, t, (thickness, reach), punch, blank_mass)?,
             ToolSet::Files(f) => file_tool_set(s, f, (thickness, blank_mass), punch, &mut notes)?,
         };
+        let paths = apply_motions(s, &mut tools, thickness, blank_mass)
+            .map_err(|e| format!("{}: {e}", s.origin))?;
         let mut model = with_tools_on_the_outer_plies(model, tools);
+        let names = tool_names(holder_tool);
+        let index = |name: &str| names.iter().position(|n| *n == name);
+        let supports = build_supports(&s.supports, &model, &index)
+            .map_err(|e| format!("{}: {e}", s.origin))?;
+        model = model.with_supports(supports);
         if let Some(heat) = &s.heat {
             let paths: Vec<&Path> = match &s.blank.layup {
                 Some(l) => l.plies.iter().map(|p| p.card.as_path()).collect(),
@@ -191,7 +212,17 @@ impl FormingModel {
         if let ToolSet::Files(_) = s.tools {
             check_start_positions(&model)?;
         }
-        let end_time = punch.time_to(p.stroke);
+        let (end_time, stroke, punch_path) = match &paths {
+            Some(plan) => {
+                punch = plan.crosshead();
+                let punch_path = plan.punch.clone();
+                let stroke = punch_path
+                    .as_ref()
+                    .map_or(0.0, |path| path.travel(plan.end_time));
+                (plan.end_time, stroke, punch_path)
+            }
+            None => (punch.time_to(p.stroke), p.stroke, None),
+        };
         let settings = SolverSettings {
             end_time,
             time_step_safety: preflight::SAFETY,
@@ -200,10 +231,10 @@ impl FormingModel {
             damping: 0.0,
             yarn_damping: 0.06,
         };
-        let max_increment = p
-            .max_increment
-            .unwrap_or(p.stroke / implicit::DEFAULT_INCREMENTS)
-            / punch.speed;
+        let max_increment = match p.max_increment {
+            Some(travel) => travel / punch.speed,
+            None => end_time / implicit::DEFAULT_INCREMENTS,
+        };
         let estimate = match p.solver {
             SolverKind::Explicit => preflight::check_model(s, &model, &settings, punch.speed)?,
             SolverKind::Implicit => {
@@ -218,6 +249,9 @@ impl FormingModel {
             model,
             card,
             punch,
+            punch_path,
+            stroke,
+            stages: paths.map_or_else(Vec::new, |p| p.stages),
             settings,
             solver: p.solver,
             max_increment,
@@ -234,6 +268,14 @@ impl FormingModel {
 }
 
 impl FormingModel {
+    /// The punch's travel at `t` (mm).
+    pub fn punch_travel(&self, t: f64) -> f64 {
+        match &self.punch_path {
+            Some(path) => path.travel(t),
+            None => self.punch.displacement(t),
+        }
+    }
+
     /// Distance of a point of the blank from the punch's ridge (axis) in the x-y plane (mm).
     pub fn distance_from_ridge(&self, x: &Vector3<f64>) -> f64 {
         distance_from_ridge(self.ridge_half_length, x.x, x.y)
@@ -514,7 +556,7 @@ fn built_in_tool_set(
     let half = 0.5 * thickness;
     let ridge = t.ridge_half_length();
     let outer = reach + 10.0;
-    let depth = s.process.stroke + t.die_fillet_radius + 10.0;
+    let depth = planned_stroke(s, t) + t.die_fillet_radius + 10.0;
     let skirt = t.punch_radius;
     let punch_shape = double_dome_punch_shape(ridge, t.punch_radius, skirt)?.lifted(-half);
     let die = DieShape {

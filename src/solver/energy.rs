@@ -14,6 +14,8 @@ pub struct Energies {
     pub external_work: f64,
     /// The tools' part of `external_work` (contact and friction forces on the blank).
     pub tool_work: f64,
+    /// Gravity's, the springs' and the grippers' part of `external_work`.
+    pub support_work: f64,
     /// Energy removed by the global mass-proportional damping.
     pub damping: f64,
     /// Energy taken by the yarn-rate damping (part of the internal work).

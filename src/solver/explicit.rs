@@ -21,6 +21,7 @@ use crate::contact::penalty::{self, Nodes};
 use crate::contact::ply_contact::PlyNodes;
 use crate::element::Bending;
 use crate::material::{MaterialError, MembraneKinematics, StepModuli};
+use crate::support::SupportsAt;
 use nalgebra::Vector3;
 use rayon::prelude::*;
 
@@ -100,6 +101,8 @@ struct PreviousStep {
     contact: Vec<Vector3<f64>>,
     /// Contact forces of the neighbouring plies on the nodes.
     interply: Vec<Vector3<f64>>,
+    /// Forces of gravity, the springs and the grippers on the nodes.
+    support: Vec<Vector3<f64>>,
     reactions: Vec<Vector3<f64>>,
     /// `x_n - x_{n-1}`.
     increments: Vec<Vector3<f64>>,
@@ -140,22 +143,26 @@ pub fn run(
         forces: zeros.clone(),
         contact: zeros.clone(),
         interply: zeros.clone(),
+        support: zeros.clone(),
         reactions: zeros.clone(),
         increments: zeros,
         time_step: 0.0,
     };
     let mut next_output = 0.0;
     let mut runaway_steps = 0;
+    let physical_masses = model.physical_nodal_masses();
+    let support_step = model.supports.stable_step(&state.masses);
     loop {
         let (stable_step, damping_power) =
             forces.evaluate(model, &mut state, previous.time_step, settings.yarn_damping)?;
-        let full_step = settings.time_step_safety * stable_step;
+        let full_step = settings.time_step_safety * stable_step.min(support_step);
         let dt = full_step.min(settings.end_time - state.time);
         if !model.tools.is_empty() {
             // the penalty follows the full step: a last step cut short to reach the end time
             // would otherwise stiffen it without bound
             tool_contact(model, &mut state, full_step);
         }
+        support_loads(model, &mut state, &physical_masses);
         if let Some(plies) = &mut ply_contact {
             plies.set_frictions(&state.interface_frictions);
             let nodes = PlyNodes {
@@ -205,6 +212,10 @@ pub fn run(
         for (impulse, load) in state.tool_impulses.iter_mut().zip(&state.tool_loads) {
             *impulse += load.force * dt;
         }
+        let supports = &mut state.supports;
+        model
+            .supports
+            .release(state.time + dt, &supports.loads, &mut supports.released);
         if let Some(node) = state
             .positions
             .iter()
@@ -266,7 +277,7 @@ fn advance(
     let dt_mean = 0.5 * (previous.time_step + dt);
     let t_half = state.time + 0.5 * dt;
     let (mut kinetic, mut internal, mut external, mut damping_work) = (0.0, 0.0, 0.0, 0.0);
-    let (mut tool, mut interply) = (0.0, 0.0);
+    let (mut tool, mut interply, mut support) = (0.0, 0.0, 0.0);
     // m (v_new - v_old)/dt + c m (v_new + v_old)/2 + f = 0, solved for v_new
     let half_damp = 0.5 * damping * dt_mean;
     for (a, motion) in prescribed.iter().enumerate() {
@@ -274,7 +285,14 @@ fn advance(
         let f_int = state.internal_forces[a];
         let f_contact = state.contacts[a].force;
         let f_ply = state.interply.get(a).map_or(Vector3::zeros(), |c| c.force);
-        let f = f_int - f_contact - f_ply;
+        let f_support = state
+            .supports
+            .loads
+            .forces
+            .get(a)
+            .copied()
+            .unwrap_or_else(Vector3::zeros);
+        let f = f_int - f_contact - f_ply - f_support;
         let v_old = state.velocities[a];
         let free = (v_old * (1.0 - half_damp) - f * (dt_mean / m)) / (1.0 + half_damp);
         let held = held_components(*motion);
@@ -298,6 +316,7 @@ fn advance(
         external += 0.5 * (previous.reactions[a] + reaction).dot(&previous.increments[a]);
         tool += 0.5 * (previous.contact[a] + f_contact).dot(&previous.increments[a]);
         interply += 0.5 * (previous.interply[a] + f_ply).dot(&previous.increments[a]);
+        support += 0.5 * (previous.support[a] + f_support).dot(&previous.increments[a]);
         let increment = v_new * dt;
         state.velocities[a] = v_new;
         state.reactions[a] = reaction;
@@ -305,6 +324,7 @@ fn advance(
         previous.forces[a] = f_int;
         previous.contact[a] = f_contact;
         previous.interply[a] = f_ply;
+        previous.support[a] = f_support;
         previous.reactions[a] = reaction;
         previous.increments[a] = increment;
     }
@@ -316,10 +336,24 @@ fn advance(
     }
     state.energies.kinetic = kinetic;
     state.energies.internal_work += internal;
-    state.energies.external_work += external + tool;
+    state.energies.external_work += external + tool + support;
     state.energies.tool_work += tool;
+    state.energies.support_work += support;
     state.energies.interply_work += interply;
     state.energies.damping += damping_work;
+}
+
+/// The forces of gravity, the springs and the grippers on every node now (`support`), gravity
+/// on the `physical` masses.
+fn support_loads(model: &Model, state: &mut State, physical: &[f64]) {
+    if model.supports.is_empty() {
+        return;
+    }
+    let at = SupportsAt {
+        translations: &state.tool_translations,
+        released: &state.supports.released,
+    };
+    state.supports.loads = model.supports.loads(&state.positions, physical, at);
 }
 
 /// Contact forces of the tools on every node for the step `dt` about to be taken

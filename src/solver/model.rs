@@ -14,6 +14,7 @@ use crate::material::{
     FibreDirections, Laminate, LayerTemperatures, MaterialError, MembraneKinematics,
 };
 use crate::mesh::{Mesh, MeshError};
+use crate::support::Supports;
 use nalgebra::{Matrix2, Vector3};
 use std::ops::Range;
 use std::sync::Arc;
@@ -109,6 +110,8 @@ pub struct Model {
     pub constraints: Vec<Constraint>,
     /// The heat problem of a non-isothermal run (docs/model.md §9); `None`: isothermal.
     pub heat: Option<HeatModel>,
+    /// Gravity, springs and grippers (docs/model.md §10); empty by default.
+    pub supports: Supports,
 }
 
 /// Why a model cannot be built.
@@ -261,6 +264,7 @@ impl Model {
             temperature,
             constraints,
             heat: None,
+            supports: Supports::default(),
         })
     }
 
@@ -275,6 +279,25 @@ impl Model {
             .get(k)
             .copied()
             .unwrap_or_else(|| self.temperature.into())
+    }
+
+    /// The same blank under gravity, held by springs or grippers.
+    pub fn with_supports(mut self, supports: Supports) -> Self {
+        self.supports = supports;
+        self
+    }
+
+    /// Each node's physical mass, `sum_e rho t A / corners` over its elements (tonne): what
+    /// gravity acts on, whatever mass scaling adds.
+    pub fn physical_nodal_masses(&self) -> Vec<f64> {
+        let mut masses = vec![0.0; self.mesh.nodes.len()];
+        for (k, e) in self.elements.iter().enumerate() {
+            let share = self.density(k) * self.thickness(k) * e.area / e.nodes().len() as f64;
+            for &a in e.nodes() {
+                masses[a] += share;
+            }
+        }
+        masses
     }
 
     /// The same blank with a temperature field: a non-isothermal run.

@@ -10,6 +10,7 @@ use crate::element::bending::{BendingPatch, BendingRigidity};
 use crate::material::{
     LaminateState, LayerTemperatures, MaterialError, MembraneKinematics, MembraneResponse,
 };
+use crate::support::SupportState;
 use crate::thermal::ThermalState;
 use nalgebra::{Matrix2, Vector3};
 use rayon::prelude::*;
@@ -66,6 +67,9 @@ pub struct State {
     /// The friction of each interface of a layup at its temperature; empty in an isothermal
     /// run, where the model's interfaces' hold.
     pub interface_frictions: Vec<FilmFriction>,
+    /// Gravity's, the springs' and the grippers' loads at the last step, and which grippers
+    /// have let go.
+    pub supports: SupportState,
 }
 
 impl State {
@@ -114,6 +118,7 @@ impl State {
             temperatures: Vec::new(),
             bending_rigidities: Vec::new(),
             interface_frictions: Vec::new(),
+            supports: model.supports.start(n_nodes),
         }
     }
 

@@ -20,6 +20,7 @@ use crate::element::bending::{BendingPatch, BendingRigidity};
 use crate::material::laminate::BackwardEulerStep;
 use crate::material::{LaminateState, LayerTemperatures, MaterialError, MembraneResponse};
 use crate::solver::model::{Model, Motion};
+use crate::support::{SupportLoads, SupportsAt};
 use nalgebra::{DMatrix, Matrix2, Matrix3, Matrix3x2, SymmetricEigen, Vector3};
 use rayon::prelude::*;
 
@@ -57,6 +58,8 @@ pub struct Layout {
     diagonal: Vec<Scatter>,
     /// Pairs of nodes of neighbouring plies the ply–ply contact may couple.
     couplings: Vec<Vec<usize>>,
+    /// Each node's physical mass (tonne): what gravity pulls.
+    pub physical_masses: Vec<f64>,
 }
 
 impl Layout {
@@ -108,6 +111,7 @@ impl Layout {
         let diagonal = (0..nodes).map(|n| scatter(&vec![n])).collect();
         let tool_drag = 1e-9 * penalty.iter().sum::<f64>();
         Self {
+            physical_masses: model.physical_nodal_masses(),
             nodes,
             size,
             held,
@@ -293,6 +297,8 @@ pub struct IncrementStart<'a> {
     /// The bending rigidity of each element at its temperature over the increment; empty where
     /// the patches' own hold (an isothermal run).
     pub bending_rigidities: &'a [BendingRigidity],
+    /// Which grippers have let go (the state's at the increment's start).
+    pub released: &'a [bool],
 }
 
 impl IncrementStart<'_> {
@@ -385,6 +391,8 @@ pub struct Evaluation {
     pub tunnelled: usize,
     /// Each node's contact with its neighbouring plies (empty without interfaces).
     pub interply: Vec<PlyNodeContact>,
+    /// Gravity's, the springs' and the grippers' forces (empty without supports).
+    pub supports: SupportLoads,
 }
 
 /// Evaluates the residual and tangent of a model.
@@ -557,7 +565,15 @@ impl Evaluator<'_> {
                 potential -= force * trial.translations[k].dot(&axis);
             }
         }
+        let supports = self.supports(start, trial);
+        potential += supports.potential;
+        for (n, f) in supports.forces.iter().enumerate() {
+            for d in 0..3 {
+                residual[3 * n + d] -= f[d];
+            }
+        }
         Ok(Evaluation {
+            supports,
             residual,
             matrix: None,
             internal,
@@ -638,12 +654,33 @@ impl Evaluator<'_> {
         for u in layout.tool_unknown.iter().flatten() {
             values[layout.pattern.place(*u, *u).expect("tool diagonal")] += layout.tool_drag;
         }
+        let at = SupportsAt {
+            translations: trial.translations,
+            released: start.released,
+        };
+        for (n, block) in model.supports.stiffness(trial.positions, at) {
+            layout.diagonal[n].add(&layout.held, values, |_, _| block);
+        }
         for (i, &held) in layout.held.iter().enumerate() {
             if held {
                 values[layout.pattern.place(i, i).expect("diagonal")] = 1.0;
             }
         }
         Ok(())
+    }
+
+    /// Gravity's, the springs' and the grippers' forces at `trial` (Eqs. (S1)–(S4)); none
+    /// without supports.
+    fn supports(&self, start: &IncrementStart, trial: &Trial) -> SupportLoads {
+        let supports = &self.model.supports;
+        if supports.is_empty() {
+            return SupportLoads::default();
+        }
+        let at = SupportsAt {
+            translations: trial.translations,
+            released: start.released,
+        };
+        supports.loads(trial.positions, &self.layout.physical_masses, at)
     }
 
     /// Forces, potential and response of element `k`.

@@ -118,6 +118,7 @@ struct Converged {
     previous_forces: Vec<Vector3<f64>>,
     previous_reactions: Vec<Vector3<f64>>,
     previous_contact: Vec<Vector3<f64>>,
+    previous_support: Vec<Vector3<f64>>,
     /// Friction of each node on the plies below and above it, lagged for the next increment,
     /// and the force of the plies on each node at the last one.
     ply_lags: PlyLags,
@@ -272,6 +273,7 @@ pub fn run(
         previous_forces: vec![Vector3::zeros(); n],
         previous_reactions: vec![Vector3::zeros(); n],
         previous_contact: vec![Vector3::zeros(); n],
+        previous_support: vec![Vector3::zeros(); n],
         ply_lags: vec![[None, None]; state.interply.len()],
         previous_interply: vec![Vector3::zeros(); n],
     };
@@ -468,6 +470,7 @@ pub fn residual_and_tangent(
         ply_faces: &faces,
         temperatures: &rest.temperatures,
         bending_rigidities: &rest.bending_rigidities,
+        released: &rest.supports.released,
     };
     let trial = Trial {
         positions,
@@ -767,6 +770,7 @@ fn predictor(model: &Model, state: &State, dt: f64) -> (Vec<Vector3<f64>>, Vec<V
                 + match &tool.motion {
                     ToolMotion::Fixed => Vector3::zeros(),
                     ToolMotion::Velocity(v) => v(t_half) * dt,
+                    ToolMotion::Path(p) => p.mean_velocity(t_half, dt) * dt,
                     ToolMotion::Force { .. } => state.tool_velocities[k] * dt,
                 }
         })
@@ -845,8 +849,9 @@ fn accept(
 ) {
     let (model, layout) = (evaluator.model, evaluator.layout);
     accept_interply(evaluator, state, converged, (&evaluation, &x), dt);
-    let (mut internal, mut external, mut tool) = (0.0, 0.0, 0.0);
+    let (mut internal, mut external, mut tool, mut support) = (0.0, 0.0, 0.0, 0.0);
     let (mut kinetic, mut dissipated) = (0.0, 0.0);
+    let no_support = Vector3::zeros();
     for (a, x_a) in x.iter().enumerate() {
         let du = x_a - state.positions[a];
         let f_int = evaluation.internal[a];
@@ -862,6 +867,11 @@ fn accept(
         internal += 0.5 * (converged.previous_forces[a] + f_int).dot(&du);
         external += 0.5 * (converged.previous_reactions[a] + reaction).dot(&du);
         tool += 0.5 * (converged.previous_contact[a] + f_contact).dot(&du);
+        let f_support = evaluation.supports.forces.get(a).unwrap_or(&no_support);
+        support += 0.5 * (converged.previous_support[a] + f_support).dot(&du);
+        if let Some(previous) = converged.previous_support.get_mut(a) {
+            *previous = *f_support;
+        }
         converged.previous_forces[a] = f_int;
         converged.previous_reactions[a] = reaction;
         converged.previous_contact[a] = f_contact;
@@ -906,10 +916,18 @@ fn accept(
     state.tool_loads = evaluation.loads;
     state.time_step = dt;
     state.time += dt;
+    if !model.supports.is_empty() {
+        state.supports.loads = evaluation.supports;
+        let supports = &mut state.supports;
+        model
+            .supports
+            .release(state.time, &supports.loads, &mut supports.released);
+    }
     state.energies.kinetic = kinetic;
     state.energies.internal_work += internal;
-    state.energies.external_work += external + tool;
+    state.energies.external_work += external + tool + support;
     state.energies.tool_work += tool;
+    state.energies.support_work += support;
     state.energies.damping += evaluation.drag_work + dissipated;
 }
 

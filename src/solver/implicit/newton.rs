@@ -176,6 +176,7 @@ impl Iterate {
             ply_faces: &self.ply_faces,
             temperatures: &state.temperatures,
             bending_rigidities: &state.bending_rigidities,
+            released: &state.supports.released,
         }
     }
 
