@@ -562,3 +562,32 @@ fn the_explicit_solver_drops_a_blank_on_soft_springs_as_a_mass_on_springs() {
     let balance = result.records.last().unwrap().energies.balance_error();
     assert!(balance < 1e-2, "energy balance error {balance}");
 }
+
+/// The tutorial of matched dies on springs, reduced: 10 mm cells, closed to 3 mm only. Its two
+/// stages run, the blank sags before the dies touch it, and the springs pull at least their
+/// preload once the punch lifts the blank.
+#[test]
+fn the_matched_die_example_runs_in_reduced_form() {
+    let (forming, result) = common::form(
+        "examples/double-dome-matched.toml",
+        &[
+            "blank.element_size=10".into(),
+            "process.stages[2].gap=3.0".into(),
+            "output.frames=0".into(),
+            "output.history_points=20".into(),
+        ],
+    );
+    result.outcome.as_ref().expect("the run ends");
+    assert_eq!(forming.stages.len(), 2);
+    assert_eq!(forming.model.supports.springs.len(), 8);
+    assert!(forming.model.supports.gravity.is_some(), "on by default on springs");
+    let before: Vec<_> = result
+        .records
+        .iter()
+        .filter(|r| r.time < forming.stages[0].1 && r.punch_force.abs() < 1e-3)
+        .collect();
+    assert!(before.iter().any(|r| r.supports.sag > 0.1), "no sag before the punch");
+    let last = result.records.last().unwrap();
+    assert!(last.supports.springs > 8.0 * 5.0, "{:?}", last.supports);
+    assert!(last.die_force > 0.0 && last.punch_force > 0.0);
+}

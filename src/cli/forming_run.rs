@@ -222,8 +222,10 @@ fn motion_rows(forming: &FormingModel, result: &FormingRun) -> Vec<(&'static str
         ));
     }
     let supports = &forming.model.supports;
-    if supports.gravity.is_some() {
-        rows.push(("sag before the tools touch", sag_before_contact(records)));
+    if let Some(g) = &supports.gravity {
+        let masses: f64 = forming.model.physical_nodal_masses().iter().sum();
+        let weight = masses * g.acceleration.norm();
+        rows.push(("sag before the tools touch", sag_before_contact(records, weight)));
     }
     if let Some(last) = records.last() {
         if !supports.springs.is_empty() {
@@ -252,11 +254,15 @@ fn motion_rows(forming: &FormingModel, result: &FormingRun) -> Vec<(&'static str
     rows
 }
 
-/// The blank's sag at the last record before any tool touched it.
-fn sag_before_contact(records: &[FormingRecord]) -> String {
+/// The blank's sag at the last record before any tool touched it: before the tools carry a
+/// hundredth of the blank's `weight` (N), as the contact's springs engage a little before the
+/// faces meet.
+fn sag_before_contact(records: &[FormingRecord], weight: f64) -> String {
     let free = records
         .iter()
-        .take_while(|r| r.punch_force.abs() + r.holder_force.abs() + r.die_force.abs() == 0.0)
+        .take_while(|r| {
+            r.punch_force.abs() + r.holder_force.abs() + r.die_force.abs() < 0.01 * weight
+        })
         .last();
     match free {
         Some(r) => format!("{:.3} mm (at {:.3} s)", r.supports.sag, r.time),

@@ -150,6 +150,30 @@ impl RigidTool {
         self
     }
 
+    /// The same tool moved by `by` (mm) before the run starts: a built-in tool keeps its exact
+    /// surface where it moves along `z` (its axis), and is blended over its triangles
+    /// otherwise.
+    pub fn moved(&self, by: Vector3<f64>) -> Result<Self, String> {
+        let surface = TriangleSurface {
+            vertices: self.surface.vertices.iter().map(|v| v + by).collect(),
+            triangles: self.surface.triangles.clone(),
+        };
+        let tool = RigidTool::new(
+            &self.name,
+            surface,
+            self.motion.clone(),
+            self.friction,
+            self.search_radius,
+        )?;
+        Ok(match (&self.exact, &self.blend) {
+            (Some(exact), _) if by.x == 0.0 && by.y == 0.0 => {
+                tool.with_exact_surface(exact.clone().lifted(by.z))
+            }
+            (Some(_), _) | (None, Some(_)) => tool.with_blended_surface(),
+            (None, None) => tool,
+        })
+    }
+
     /// The blended surface, where the tool has one.
     pub fn blended_surface(&self) -> Option<&BlendedSurface> {
         self.blend.as_ref()

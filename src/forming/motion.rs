@@ -27,6 +27,9 @@ pub struct MotionTable {
     pub speed: Option<Vec<[f64; 2]>>,
     /// A constant force (N) pushing the tool along its direction.
     pub force: Option<f64>,
+    /// Where the tool starts along its direction (mm) from where the scenario places it (a
+    /// negative value: back from touching the blank); 0 by default.
+    pub start: Option<f64>,
 }
 
 /// One `[[process.stages]]` table.

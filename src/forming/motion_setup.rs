@@ -86,6 +86,13 @@ pub fn apply_motions(
                 .direction
                 .map_or(default_direction(name), |d| Vector3::from(d).normalize()),
         });
+        if let Some(start) = table.start {
+            if !start.is_finite() {
+                return Err(format!("{key}.start must be a finite number (mm)"));
+            }
+            let by = directions[k] * start;
+            tools[k] = tools[k].moved(by).map_err(|e| format!("{key}.start: {e}"))?;
+        }
         let Some(motion) = motion else { continue };
         if staged.contains(name) {
             return Err(format!(

@@ -788,6 +788,10 @@ pub struct Tools {
     pub holder_inner_radius: Option<f64>,
     /// Target edge length of the tool meshes (mm).
     pub resolution: f64,
+    /// A matched die (`tools.die_shape = "matched"`): the cavity the punch fills once it has
+    /// travelled this far (mm, `tools.part_depth`), with the gap `die_opening_radius -
+    /// punch_radius`; `None`: the ring die with its open hole.
+    pub matched_depth: Option<f64>,
 }
 
 /// Tool surfaces read from files (`shape = "files"`): STL, Gmsh `.msh` or Abaqus `.inp`, in mm,
@@ -823,6 +827,8 @@ struct ToolsTable {
     die_fillet_radius: Option<f64>,
     holder_inner_radius: Option<f64>,
     resolution: Option<f64>,
+    die_shape: Option<String>,
+    part_depth: Option<f64>,
     punch: Option<ToolTable>,
     die: Option<ToolTable>,
     holder: Option<ToolTable>,
@@ -846,6 +852,32 @@ impl ToolTable {
     /// Whether it names a surface (a file or a set of one).
     fn names_a_surface(&self) -> bool {
         self.file.is_some() || self.element_set.is_some()
+    }
+}
+
+/// The depth of a matched die (`tools.die_shape = "matched"` with `tools.part_depth`), `None`
+/// for the ring die.
+fn matched_depth(shape: Option<&str>, depth: Option<f64>) -> Result<Option<f64>, String> {
+    match (shape.unwrap_or("ring"), depth) {
+        ("ring", None) => Ok(None),
+        ("ring", Some(_)) => Err(
+            "tools.part_depth is the depth of a matched die: set tools.die_shape = \"matched\""
+                .into(),
+        ),
+        ("matched", Some(d)) if d.is_finite() && d > 0.0 => Ok(Some(d)),
+        ("matched", Some(d)) => Err(format!(
+            "tools.part_depth = {} mm must be positive: the punch's travel when the dies close",
+            shown(d)
+        )),
+        ("matched", None) => Err(
+            "tools.part_depth (mm, the punch's travel when the dies close) is needed for \
+             tools.die_shape = \"matched\""
+                .into(),
+        ),
+        (other, _) => Err(format!(
+            "tools.die_shape = \"{other}\": the dies available are \"ring\" (an open hole, the \
+             default) and \"matched\" (a cavity the punch fills)"
+        )),
     }
 }
 
@@ -880,6 +912,7 @@ impl ToolsTable {
             resolution: need("resolution", self.resolution)?,
             half_length: self.half_length,
             holder_inner_radius: self.holder_inner_radius,
+            matched_depth: matched_depth(self.die_shape.as_deref(), self.part_depth)?,
             shape,
         }))
     }
@@ -903,6 +936,8 @@ impl ToolsTable {
     fn files(self, folder: &Path) -> Result<ToolFiles, String> {
         let built_in_keys = [
             ("half_length", self.half_length.is_some()),
+            ("die_shape", self.die_shape.is_some()),
+            ("part_depth", self.part_depth.is_some()),
             ("punch_radius", self.punch_radius.is_some()),
             ("die_opening_radius", self.die_opening_radius.is_some()),
             ("die_fillet_radius", self.die_fillet_radius.is_some()),
@@ -1324,6 +1359,7 @@ impl Scenario {
                 ("tools.die_fillet_radius", Some(t.die_fillet_radius), LENGTH),
                 ("tools.holder_inner_radius", t.holder_inner_radius, LENGTH),
                 ("tools.resolution", Some(t.resolution), LENGTH),
+                ("tools.part_depth", t.matched_depth, LENGTH),
             ]),
             ToolSet::Files(f) => given.push(("tools.flange_radius", f.flange_radius, LENGTH)),
         }
@@ -1438,6 +1474,15 @@ impl Scenario {
         }
         let p = &self.process;
         let punch_height = 2.0 * t.punch_radius;
+        if let Some(depth) = t.matched_depth.filter(|d| *d > punch_height) {
+            return Err(format!(
+                "tools.part_depth = {} mm goes beyond the punch (radius {} mm with a skirt as \
+                 tall: {} mm of travel at most)",
+                shown_apart(depth, punch_height),
+                shown(t.punch_radius),
+                shown(punch_height)
+            ));
+        }
         if p.stroke > punch_height {
             return Err(format!(
                 "process.stroke = {} mm goes beyond the punch (radius {} mm with a skirt as tall: \

@@ -14,8 +14,9 @@ use super::scenario::{BlankShape, Scenario, SetKind, ToolFile, ToolFiles, ToolSe
 use super::supports::build_supports;
 use crate::contact::{
     distance_from_ridge, double_dome_die, double_dome_die_shape, double_dome_holder,
-    double_dome_holder_shape, double_dome_punch, double_dome_punch_shape, read_stl,
-    ContactSettings, DieShape, Facing, RigidTool, SweptProfile, ToolMotion, ToolPath,
+    double_dome_holder_shape, double_dome_matched_die, double_dome_matched_die_shape,
+    double_dome_punch, double_dome_punch_shape, read_stl,
+    ContactSettings, DieShape, Facing, MatchedDie, RigidTool, SweptProfile, ToolMotion, ToolPath,
     TriangleSurface,
 };
 use crate::experiment::sheet_test::Crosshead;
@@ -559,22 +560,15 @@ fn built_in_tool_set(
     let depth = planned_stroke(s, t) + t.die_fillet_radius + 10.0;
     let skirt = t.punch_radius;
     let punch_shape = double_dome_punch_shape(ridge, t.punch_radius, skirt)?.lifted(-half);
-    let die = DieShape {
-        opening_radius: t.die_opening_radius,
-        fillet_radius: t.die_fillet_radius,
-        outer_radius: outer,
-        depth,
-    };
-    let die_shape = double_dome_die_shape(ridge, &die)?.lifted(half);
     let punch_surface = shifted(
         double_dome_punch(ridge, t.punch_radius, skirt, t.resolution)?,
         -half,
     );
-    let die_surface = shifted(double_dome_die(ridge, &die, t.resolution)?, half);
+    let die_surface = die_of(t, (outer, depth), half)?;
     let mut tools = punch_and_die(
         s,
         (punch_surface, Some(punch_shape)),
-        (die_surface, Some(die_shape)),
+        die_surface,
         punch,
         thickness,
     )?;
@@ -593,6 +587,34 @@ fn built_in_tool_set(
             .with_exact_surface(holder_shape),
     );
     Ok((tools, Some(2)))
+}
+
+/// The die of the built-in set, `outer` its reach from the ridge and `depth` its hole's
+/// (mm), placed `half` above the blank's mid-plane: the ring die, or the matched die whose
+/// cavity the punch fills with the gap `die_opening_radius - punch_radius` once it has
+/// travelled `part_depth` beyond touching the blank.
+fn die_of(t: &Tools, (outer, depth): (f64, f64), half: f64) -> Result<ToolSurface, String> {
+    let ridge = t.ridge_half_length();
+    if let Some(travel) = t.matched_depth {
+        let die = MatchedDie {
+            punch_radius: t.punch_radius,
+            gap: t.die_opening_radius - t.punch_radius,
+            fillet_radius: t.die_fillet_radius,
+            outer_radius: outer,
+            closed_travel: travel,
+        };
+        let shape = double_dome_matched_die_shape(ridge, &die)?.lifted(half);
+        let surface = shifted(double_dome_matched_die(ridge, &die, t.resolution)?, half);
+        return Ok((surface, Some(shape)));
+    }
+    let die = DieShape {
+        opening_radius: t.die_opening_radius,
+        fillet_radius: t.die_fillet_radius,
+        outer_radius: outer,
+        depth,
+    };
+    let shape = double_dome_die_shape(ridge, &die)?.lifted(half);
+    Ok((shifted(double_dome_die(ridge, &die, t.resolution)?, half), Some(shape)))
 }
 
 /// How far the blank reaches from the punch's ridge (mm): its farthest node (for the built-in
