@@ -580,13 +580,19 @@ fn the_matched_die_example_runs_in_reduced_form() {
     result.outcome.as_ref().expect("the run ends");
     assert_eq!(forming.stages.len(), 2);
     assert_eq!(forming.model.supports.springs.len(), 8);
-    assert!(forming.model.supports.gravity.is_some(), "on by default on springs");
+    assert!(
+        forming.model.supports.gravity.is_some(),
+        "on by default on springs"
+    );
     let before: Vec<_> = result
         .records
         .iter()
         .filter(|r| r.time < forming.stages[0].1 && r.punch_force.abs() < 1e-3)
         .collect();
-    assert!(before.iter().any(|r| r.supports.sag > 0.1), "no sag before the punch");
+    assert!(
+        before.iter().any(|r| r.supports.sag > 0.1),
+        "no sag before the punch"
+    );
     let last = result.records.last().unwrap();
     assert!(last.supports.springs > 8.0 * 5.0, "{:?}", last.supports);
     assert!(last.die_force > 0.0 && last.punch_force > 0.0);

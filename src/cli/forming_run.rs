@@ -225,7 +225,10 @@ fn motion_rows(forming: &FormingModel, result: &FormingRun) -> Vec<(&'static str
     if let Some(g) = &supports.gravity {
         let masses: f64 = forming.model.physical_nodal_masses().iter().sum();
         let weight = masses * g.acceleration.norm();
-        rows.push(("sag before the tools touch", sag_before_contact(records, weight)));
+        rows.push((
+            "sag before the tools touch",
+            sag_before_contact(records, weight),
+        ));
     }
     if let Some(last) = records.last() {
         if !supports.springs.is_empty() {

@@ -91,7 +91,9 @@ pub fn apply_motions(
                 return Err(format!("{key}.start must be a finite number (mm)"));
             }
             let by = directions[k] * start;
-            tools[k] = tools[k].moved(by).map_err(|e| format!("{key}.start: {e}"))?;
+            tools[k] = tools[k]
+                .moved(by)
+                .map_err(|e| format!("{key}.start: {e}"))?;
         }
         let Some(motion) = motion else { continue };
         if staged.contains(name) {

@@ -15,9 +15,8 @@ use super::supports::build_supports;
 use crate::contact::{
     distance_from_ridge, double_dome_die, double_dome_die_shape, double_dome_holder,
     double_dome_holder_shape, double_dome_matched_die, double_dome_matched_die_shape,
-    double_dome_punch, double_dome_punch_shape, read_stl,
-    ContactSettings, DieShape, Facing, MatchedDie, RigidTool, SweptProfile, ToolMotion, ToolPath,
-    TriangleSurface,
+    double_dome_punch, double_dome_punch_shape, read_stl, ContactSettings, DieShape, Facing,
+    MatchedDie, RigidTool, SweptProfile, ToolMotion, ToolPath, TriangleSurface,
 };
 use crate::experiment::sheet_test::Crosshead;
 use crate::limits::{shown, shown_apart};
@@ -614,7 +613,10 @@ fn die_of(t: &Tools, (outer, depth): (f64, f64), half: f64) -> Result<ToolSurfac
         depth,
     };
     let shape = double_dome_die_shape(ridge, &die)?.lifted(half);
-    Ok((shifted(double_dome_die(ridge, &die, t.resolution)?, half), Some(shape)))
+    Ok((
+        shifted(double_dome_die(ridge, &die, t.resolution)?, half),
+        Some(shape),
+    ))
 }
 
 /// How far the blank reaches from the punch's ridge (mm): its farthest node (for the built-in
