@@ -6,6 +6,7 @@ pub mod drape_preview;
 pub mod export;
 pub mod heat;
 pub mod layup;
+pub mod outline;
 pub mod output;
 pub mod pictures;
 pub mod preflight;
