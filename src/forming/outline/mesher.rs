@@ -1,8 +1,9 @@
 //! The flat blank cut to an outline, meshed as an O-grid of quadrilaterals: a square of
 //! cells in the middle and, from each node of the square's edge, a ray out to the outline cut
-//! in equal steps. The blank's edge is then the outline itself (its nodes on it), with no
-//! staircase of whole cells to spoil the margin measured against it; it needs an outline that
-//! every ray from its centroid crosses once (star-shaped), as a blank around a drawn part is.
+//! in equal steps, then evened out by Laplacian smoothing of the nodes inside. The blank's edge
+//! is then the outline itself (its nodes on it), with no staircase of whole cells to spoil the
+//! margin measured against it; it needs an outline that every ray from its centroid crosses
+//! once (star-shaped), as a blank around a drawn part is.
 
 use super::polygon::{self, Polygon};
 use super::trim::at;
@@ -63,7 +64,52 @@ pub fn mesh_outline(outline: &[Vector2<f64>], size: f64) -> Result<OutlineMesh, 
         .sum::<f64>()
         / ring.len() as f64;
     let layers = (mean_reach / size).round().max(1.0) as usize;
-    Ok(assemble(n, half, centre, &ring, &exits, layers))
+    let mut blank = assemble(n, half, centre, &ring, &exits, layers);
+    smooth(&mut blank);
+    Ok(blank)
+}
+
+/// Laplacian sweeps that move each node inside the blank towards the mean of its neighbours
+/// (the edge's stay on the outline).
+const SMOOTHING_SWEEPS: usize = 30;
+
+/// Evens out the O-grid's cells: the rays cut in equal steps leave thin cells where the
+/// outline comes near the square and long ones where it is far (an elongated outline), and
+/// the bending patches of thin cells can be too ill-conditioned to build. Sweeps that would
+/// fold or turn a cell are not kept.
+fn smooth(blank: &mut OutlineMesh) {
+    let mesh = &mut blank.mesh;
+    let mut neighbours: Vec<Vec<usize>> = vec![Vec::new(); mesh.nodes.len()];
+    for cell in &mesh.cells {
+        for (a, b) in cell.edges() {
+            neighbours[a].push(b);
+            neighbours[b].push(a);
+        }
+    }
+    let mut fixed = vec![false; mesh.nodes.len()];
+    for &e in &blank.edge {
+        fixed[e] = true;
+    }
+    for _ in 0..SMOOTHING_SWEEPS {
+        let moved: Vec<Vector3<f64>> = (0..mesh.nodes.len())
+            .map(|n| {
+                if fixed[n] || neighbours[n].is_empty() {
+                    return mesh.nodes[n];
+                }
+                // each edge is listed from both of its cells: the mean is the same
+                let sum: Vector3<f64> = neighbours[n].iter().map(|&m| mesh.nodes[m]).sum();
+                sum / neighbours[n].len() as f64
+            })
+            .collect();
+        let sound = mesh
+            .cells
+            .iter()
+            .all(|c| c.area_vector(&moved).z > 0.0 && !c.is_folded(&moved));
+        if !sound {
+            break;
+        }
+        mesh.nodes = moved;
+    }
 }
 
 /// The nodes of the square's edge (offsets from the centre), counter-clockwise from the
@@ -174,6 +220,24 @@ mod tests {
         }
         let size = blank.mesh.element_size();
         assert!(size > 5.0 && size < 10.0, "{size}");
+    }
+
+    #[test]
+    fn an_elongated_outline_is_meshed_with_sound_cells() {
+        let ellipse: Polygon = circle(1.0, 240)
+            .iter()
+            .map(|p| Vector2::new(90.0 * p.x, 40.0 * p.y))
+            .collect();
+        let blank = mesh_outline(&ellipse, 4.0).unwrap();
+        let x = &blank.mesh.nodes;
+        for c in &blank.mesh.cells {
+            assert!(c.area_vector(x).z > 0.0 && !c.is_folded(x));
+        }
+        // the smoothing evens the cells out: none much thinner than the size asked for
+        let smallest = (0..blank.mesh.cells.len())
+            .map(|t| blank.mesh.area(t))
+            .fold(f64::INFINITY, f64::min);
+        assert!(smallest > 0.1 * 16.0, "{smallest}");
     }
 
     #[test]
