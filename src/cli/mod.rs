@@ -136,5 +136,9 @@ mod tests {
         assert_eq!(exit_code(&anyhow::anyhow!("bad file")), 2);
         let uncovered = blank_outline::NotCovered("the trim line is not covered".into());
         assert_eq!(exit_code(&anyhow::Error::from(uncovered)), 1);
+        // blank-outline names the iteration of a forming run that stopped: the code stays
+        let interrupted = SolverError::Interrupted { step: 3, time: 0.1 };
+        let named = anyhow::Error::from(interrupted).context("iteration 2: the run stopped");
+        assert_eq!(exit_code(&named), EXIT_INTERRUPTED);
     }
 }
