@@ -1,13 +1,14 @@
 //! The `thermostamp` command line.
 //!
-//! Exit codes: 0 success; 1 a run that failed, diagnosed (the results so far are kept), or a
-//! study with a failed case;
+//! Exit codes: 0 success; 1 a run that failed, diagnosed (the results so far are kept), a
+//! study with a failed case, or a blank outline that does not cover its trim line;
 //! 2 bad input of any kind (usage, files, values, settings, or a history the material cannot
 //! follow), an output folder held by another run, or a result that could not be written (full
 //! disk, a folder that cannot be created); 130 interrupted by Ctrl-C or SIGTERM (the results so
 //! far are kept); killed by SIGPIPE when standard output is closed by its reader, as any Unix
 //! tool. Errors are one line on standard error.
 
+mod blank_outline;
 mod drape;
 mod fit;
 mod fit_fabric_tension;
@@ -46,6 +47,9 @@ enum Command {
     Run(forming_run::Args),
     /// Kinematic draping preview of a scenario: the pin-jointed net on the formed punch.
     Drape(drape::Args),
+    /// The flat blank outline that gives a trimmed part: the trim line mapped back onto the
+    /// flat blank (kinematic drape, then forming runs) and offset by a margin; CSV and DXF.
+    BlankOutline(blank_outline::Args),
     /// A process study: a base scenario run over the full factorial of parameter values, each
     /// case in its own folder, resumable, summarised in a table and charts (docs/study.md).
     Sweep(sweep::Args),
@@ -70,6 +74,7 @@ pub fn main() -> i32 {
         Command::Test(command) => virtual_test::run(&command),
         Command::Run(args) => forming_run::run(&args),
         Command::Drape(args) => drape::run(&args),
+        Command::BlankOutline(args) => blank_outline::run(&args),
         Command::Fit(command) => fit::run(&command),
         Command::Sweep(args) => sweep::run(&args),
     };
@@ -108,7 +113,9 @@ pub const EXIT_INTERRUPTED: i32 = 130;
 /// interrupted, 2 for everything else: bad input (found before the first step wherever it can
 /// be), and results that could not be written.
 fn exit_code(e: &anyhow::Error) -> i32 {
-    if e.downcast_ref::<sweep::CasesFailed>().is_some() {
+    if e.downcast_ref::<sweep::CasesFailed>().is_some()
+        || e.downcast_ref::<blank_outline::NotCovered>().is_some()
+    {
         return 1;
     }
     match e.downcast_ref::<SolverError>() {
@@ -127,5 +134,11 @@ mod tests {
         let settings = anyhow::Error::from(SolverError::Settings("x".into()));
         assert_eq!(exit_code(&settings), 2);
         assert_eq!(exit_code(&anyhow::anyhow!("bad file")), 2);
+        let uncovered = blank_outline::NotCovered("the trim line is not covered".into());
+        assert_eq!(exit_code(&anyhow::Error::from(uncovered)), 1);
+        // blank-outline names the iteration of a forming run that stopped: the code stays
+        let interrupted = SolverError::Interrupted { step: 3, time: 0.1 };
+        let named = anyhow::Error::from(interrupted).context("iteration 2: the run stopped");
+        assert_eq!(exit_code(&named), EXIT_INTERRUPTED);
     }
 }

@@ -8,6 +8,7 @@ pub mod heat;
 pub mod layup;
 pub mod motion;
 pub mod motion_setup;
+pub mod outline;
 pub mod output;
 pub mod pictures;
 pub mod preflight;

@@ -1,6 +1,7 @@
 //! Readers and writers of the files users hand in and get back.
 
 pub mod csv_table;
+pub mod dxf;
 pub mod message;
 pub mod output_folder;
 pub mod plot;
