@@ -230,32 +230,27 @@ fn motion_rows(forming: &FormingModel, result: &FormingRun) -> Vec<(&'static str
             sag_before_contact(records, weight),
         ));
     }
-    if let Some(last) = records.last() {
-        if !supports.springs.is_empty() {
+    let holds: [(&'static str, usize, Measure); 2] = [
+        ("springs", supports.springs.len(), |r| r.supports.springs),
+        ("grippers", supports.grippers.len(), |r| r.supports.grippers),
+    ];
+    for (name, count, force) in holds {
+        if let (Some(last), true) = (records.last(), count > 0) {
             rows.push((
-                "springs",
+                name,
                 format!(
-                    "{} holding {:.3} N at the end, {:.3} N at most",
-                    supports.springs.len(),
-                    last.supports.springs,
-                    peak(|r| r.supports.springs)
-                ),
-            ));
-        }
-        if !supports.grippers.is_empty() {
-            rows.push((
-                "grippers",
-                format!(
-                    "{} holding {:.3} N at the end, {:.3} N at most",
-                    supports.grippers.len(),
-                    last.supports.grippers,
-                    peak(|r| r.supports.grippers)
+                    "{count} holding {:.3} N at the end, {:.3} N at most",
+                    force(last),
+                    peak(force)
                 ),
             ));
         }
     }
     rows
 }
+
+/// What a summary row reads of each record.
+type Measure = fn(&FormingRecord) -> f64;
 
 /// The blank's sag at the last record before any tool touched it: before the tools carry a
 /// hundredth of the blank's `weight` (N), as the contact's springs engage a little before the

@@ -122,17 +122,14 @@ pub fn build_supports(
             time: positive(&format!("{key}.release_time"), g.release_time)?,
             force: positive(&format!("{key}.release_force"), g.release_force)?,
         };
-        grippers.push(GripperSet {
-            name: g
-                .name
-                .clone()
-                .unwrap_or_else(|| format!("gripper {}", i + 1)),
-            anchors: nodes.iter().map(|&n| model.mesh.nodes[n]).collect(),
-            nodes,
-            stiffness: grip,
-            carrier: carrier(&g.moves_with, &key, tool_index)?,
+        let name = g.name.clone();
+        grippers.push(GripperSet::new(
+            name.unwrap_or_else(|| format!("gripper {}", i + 1)),
+            (&nodes, &model.mesh.nodes),
+            grip,
+            carrier(&g.moves_with, &key, tool_index)?,
             release,
-        });
+        ));
     }
     Ok(Supports {
         gravity: s.gravity()?,

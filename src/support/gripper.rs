@@ -3,9 +3,8 @@
 //! limit. The hold is a stiff zero-length spring per node (the tools' contact stiffness), so
 //! that letting go changes no unknown of the solvers.
 
-use super::anchor_now;
-use super::spring::spring_node;
-use nalgebra::{Matrix3, Vector3};
+use super::spring::{SpringNode, SpringSet};
+use nalgebra::Vector3;
 
 /// When a gripper lets go: at a time, or when the force it holds reaches a limit, whichever
 /// comes first; never if neither is given.
@@ -24,45 +23,43 @@ impl Release {
     }
 }
 
-/// A gripper: its nodes and where each was gripped.
+/// A gripper: the zero-length springs that hold its nodes where they were gripped.
 #[derive(Clone, Debug, PartialEq)]
 pub struct GripperSet {
     pub name: String,
-    pub nodes: Vec<usize>,
-    /// Where each node was gripped (mm), in the order of `nodes`.
-    pub anchors: Vec<Vector3<f64>>,
-    /// Stiffness of the hold at each node (N/mm).
-    pub stiffness: f64,
-    /// The tool whose translation carries it; `None`: it stands still.
-    pub carrier: Option<usize>,
+    /// Each node tied to where it was gripped, free length 0, the hold's stiffness (N/mm),
+    /// carried by a tool or standing still.
+    pub hold: SpringSet,
     pub release: Release,
 }
 
 impl GripperSet {
-    /// Adds the hold's force on each node; returns the resultant on the blank (N) and its
-    /// energy (N·mm).
-    pub fn add_forces(
-        &self,
-        positions: &[Vector3<f64>],
-        translations: &[Vector3<f64>],
-        forces: &mut [Vector3<f64>],
-    ) -> (Vector3<f64>, f64) {
-        let mut resultant = Vector3::zeros();
-        let mut energy = 0.0;
-        for (&node, start) in self.nodes.iter().zip(&self.anchors) {
-            let anchor = anchor_now(start, self.carrier, translations);
-            let (f, e) = spring_node(&positions[node], &anchor, self.stiffness, 0.0);
-            forces[node] += f;
-            resultant += f;
-            energy += e;
-        }
-        (resultant, energy)
-    }
-
-    /// Pushes each node's `-df/dx = k I`.
-    pub fn add_stiffness(&self, blocks: &mut Vec<(usize, Matrix3<f64>)>) {
-        for &node in &self.nodes {
-            blocks.push((node, Matrix3::identity() * self.stiffness));
+    /// A gripper on `nodes` at `positions` (mm), holding each with `stiffness` (N/mm),
+    /// carried by tool `carrier` (none: fixed).
+    pub fn new(
+        name: String,
+        (nodes, positions): (&[usize], &[Vector3<f64>]),
+        stiffness: f64,
+        carrier: Option<usize>,
+        release: Release,
+    ) -> Self {
+        let nodes = nodes
+            .iter()
+            .map(|&node| SpringNode {
+                node,
+                anchor: positions[node],
+            })
+            .collect();
+        Self {
+            hold: SpringSet {
+                name: name.clone(),
+                nodes,
+                stiffness,
+                free_length: 0.0,
+                carrier,
+            },
+            name,
+            release,
         }
     }
 }
@@ -85,18 +82,11 @@ mod tests {
 
     #[test]
     fn a_carried_gripper_pulls_its_nodes_after_its_tool() {
-        let gripper = GripperSet {
-            name: "g".into(),
-            nodes: vec![0],
-            anchors: vec![Vector3::zeros()],
-            stiffness: 100.0,
-            carrier: Some(1),
-            release: Release::default(),
-        };
+        let at = [Vector3::zeros()];
+        let gripper = GripperSet::new("g".into(), (&[0], &at), 100.0, Some(1), Release::default());
         let mut forces = vec![Vector3::zeros()];
         let translations = [Vector3::zeros(), Vector3::new(0.0, 0.0, 0.5)];
-        let (resultant, energy) =
-            gripper.add_forces(&[Vector3::zeros()], &translations, &mut forces);
+        let (resultant, energy) = gripper.hold.add_forces(&at, &translations, &mut forces);
         assert!((resultant - Vector3::new(0.0, 0.0, 50.0)).norm() < 1e-12);
         assert!((energy - 12.5).abs() < 1e-12);
     }

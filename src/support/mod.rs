@@ -103,7 +103,9 @@ impl Supports {
         for (g, gripper) in self.grippers.iter().enumerate() {
             let (resultant, potential) = match at.released.get(g) {
                 Some(true) => (Vector3::zeros(), 0.0),
-                _ => gripper.add_forces(positions, at.translations, &mut loads.forces),
+                _ => gripper
+                    .hold
+                    .add_forces(positions, at.translations, &mut loads.forces),
             };
             loads.grippers.push(resultant);
             loads.potential += potential;
@@ -124,7 +126,9 @@ impl Supports {
         }
         for (g, gripper) in self.grippers.iter().enumerate() {
             if !at.released.get(g).copied().unwrap_or(false) {
-                gripper.add_stiffness(&mut blocks);
+                gripper
+                    .hold
+                    .add_stiffness(positions, at.translations, &mut blocks);
             }
         }
         blocks
@@ -134,14 +138,10 @@ impl Supports {
     /// `2 sqrt(m / k)` of the stiffest node, infinite without them.
     pub fn stable_step(&self, masses: &[f64]) -> f64 {
         let mut stiffness = vec![0.0; masses.len()];
-        for set in &self.springs {
+        let grippers = self.grippers.iter().map(|g| &g.hold);
+        for set in self.springs.iter().chain(grippers) {
             for node in &set.nodes {
                 stiffness[node.node] += set.stiffness;
-            }
-        }
-        for gripper in &self.grippers {
-            for &node in &gripper.nodes {
-                stiffness[node] += gripper.stiffness;
             }
         }
         stiffness
@@ -161,19 +161,6 @@ impl Supports {
                 released[g] = true;
             }
         }
-    }
-
-    /// Every node a spring or gripper holds, with the name of what holds it.
-    pub fn held_nodes(&self) -> impl Iterator<Item = (usize, &str)> {
-        let springs = self
-            .springs
-            .iter()
-            .flat_map(|s| s.nodes.iter().map(move |n| (n.node, s.name.as_str())));
-        let grippers = self
-            .grippers
-            .iter()
-            .flat_map(|g| g.nodes.iter().map(move |&n| (n, g.name.as_str())));
-        springs.chain(grippers)
     }
 }
 
