@@ -464,6 +464,54 @@ fn a_tool_sliding_along_x_drags_a_squeezed_blank_with_mu_n() {
     );
 }
 
+/// An extra tool under the blank, read from a file, slides along x under a blank that the die
+/// presses on it with 100 N: it pulls the blank with `mu N` within 2 %; a stage moves it by
+/// its name.
+#[test]
+fn an_extra_tool_slides_under_a_pressed_blank_with_mu_n() {
+    let dir = common::scratch_dir("press_setups", "extra");
+    let card = common::repo_path("materials/t300-5hs-pps.toml");
+    let half = 0.5
+        * MaterialCard::load(&card)
+            .unwrap()
+            .laminate
+            .reference_thickness();
+    let sled = plate(&dir, "sled", -half, 200.0);
+    let text = between_plates(
+        &dir,
+        &card,
+        (-40.0, half),
+        "width = 60.0\nlength = 60.0\nelement_size = 10.0\n",
+        &format!(
+            "[[tools.extra]]\nname = \"sled\"\nfile = \"{}\"\nfriction = 0.3\n\
+             blank_side = \"below\"\nmotion = {{ direction = [1.0, 0.0, 0.0] }}\n\
+             [[boundary]]\nnode_set = \"left\"\nheld = [\"x\"]\n\
+             [process]\ntemperature = 300.0\n\
+             [[process.stages]]\ntools = [\"sled\"]\ntravel = 2.0\nspeed = 1.0\n\
+             [process.friction]\npunch = 0.0\ndie = 0.0\nholder = 0.0\n\
+             [output]\nframes = 0\nhistory_points = 10\n",
+            sled.display()
+        ),
+    );
+    let text = text.replace("die.stl\" }", "die.stl\", motion = { force = 100.0 } }");
+    let (forming, result) = form(&text, &dir, &[]);
+    let state = result.outcome.as_ref().expect("the run ends");
+    let sled = forming
+        .model
+        .tools
+        .iter()
+        .position(|t| t.name == "sled")
+        .unwrap();
+    assert!((state.tool_translations[sled].x - 2.0).abs() < 1e-9);
+    let pull = -state.tool_loads[sled].force.x;
+    assert!(
+        (pull - 0.3 * 100.0).abs() < 0.02 * 30.0,
+        "the sled pulls {pull} N, mu N = 30 N"
+    );
+    let e = refusal(&text, &dir, &["tools.extra[1].blank_side=\"left\""]);
+    assert!(e.contains("tools.extra[1].blank_side"), "{e}");
+}
+
 /// Motions that cannot run are refused before the first step, naming their key.
 #[test]
 fn bad_motions_and_supports_are_refused_naming_the_key() {
@@ -515,6 +563,12 @@ fn bad_motions_and_supports_are_refused_naming_the_key() {
         e.contains("process.stages[1].gap") && e.contains("thickness"),
         "{e}"
     );
+    let nowhere = text.replace(
+        "[[grippers]]\nnode_set = \"left\"\n",
+        "[[grippers]]\nat = [47.0, 3.0]\nradius = 1e-3\n",
+    );
+    let e = refusal(&nowhere, &dir, &[]);
+    assert!(e.contains("grippers[1]") && e.contains("empty"), "{e}");
     let e = refusal(&closing, &dir, &["tools.punch.motion.direction=[0, 0, -1]"]);
     assert!(
         e.contains("process.stages[1]") && e.contains("never"),

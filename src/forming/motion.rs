@@ -208,8 +208,8 @@ fn stage_tools(stage: &Stage, tools: &dyn StageTools, key: &str) -> Result<Vec<u
     for name in &stage.tools {
         let k = tools.index(name).ok_or_else(|| {
             format!(
-                "{key}.tools: \"{name}\" is not a tool of this scenario (punch, die, and holder \
-                 where the scenario has one)"
+                "{key}.tools: \"{name}\" is not a tool of this scenario (punch, die, the holder \
+                 where the scenario has one, and the names of tools.extra)"
             )
         })?;
         if tools.force_driven(k) {

@@ -2,7 +2,7 @@
 //! table and the compiled `[[process.stages]]` ([`super::motion`]), with the checks that need
 //! the tools' surfaces (a stage that closes to a gap).
 
-use super::motion::{default_direction, stage_plan, StageTools, TOOL_NAMES};
+use super::motion::{default_direction, stage_plan, MotionTable, StageTools, TOOL_NAMES};
 use super::scenario::{Scenario, Tools};
 use super::setup::HOLDER_MASS_RATIO;
 use crate::contact::{RigidTool, ToolMotion, ToolPath};
@@ -32,9 +32,50 @@ impl MotionPlan {
     }
 }
 
-/// The scenario's names of the model's tools: punch, die and, where there is one, holder.
-pub fn tool_names(holder: Option<usize>) -> Vec<&'static str> {
-    TOOL_NAMES[..if holder.is_some() { 3 } else { 2 }].to_vec()
+/// The scenario's names of the model's tools: punch, die, the holder where there is one, then
+/// the extra tools.
+pub fn tool_names(s: &Scenario, holder: Option<usize>) -> Vec<String> {
+    let standard = TOOL_NAMES[..if holder.is_some() { 3 } else { 2 }].iter();
+    standard
+        .map(|n| n.to_string())
+        .chain(s.extra_tools.iter().map(|t| t.name.clone()))
+        .collect()
+}
+
+/// One tool as its motion is written: its name, its table's key, the table, its default
+/// direction, and its place among the model's tools (none: a holder the scenario lacks).
+struct Slot<'a> {
+    name: &'a str,
+    key: String,
+    table: Option<&'a MotionTable>,
+    default: Vector3<f64>,
+    place: Option<usize>,
+}
+
+/// The tools' slots: punch, die, holder, then the extras (after the standard tools).
+fn slots<'a>(s: &'a Scenario, standard: usize) -> Vec<Slot<'a>> {
+    let mut slots: Vec<Slot> = TOOL_NAMES
+        .iter()
+        .enumerate()
+        .map(|(k, name)| Slot {
+            name,
+            key: format!("tools.{name}.motion"),
+            table: s.motions[k].as_ref(),
+            default: default_direction(name),
+            place: (k < standard).then_some(k),
+        })
+        .collect();
+    for (i, tool) in s.extra_tools.iter().enumerate() {
+        let above = tool.above("").unwrap_or(false);
+        slots.push(Slot {
+            name: &tool.name,
+            key: format!("tools.extra[{}].motion", i + 1),
+            table: tool.motion.as_ref(),
+            default: if above { -Vector3::z() } else { Vector3::z() },
+            place: Some(standard + i),
+        });
+    }
+    slots
 }
 
 /// The punch's travel the die must leave room for (mm): the stroke, or where stages move the
@@ -65,27 +106,29 @@ pub fn apply_motions(
         // no single stroke: the punch stands still unless its table or a stage moves it
         tools[0].motion = ToolMotion::Fixed;
     }
-    let mut directions: Vec<Vector3<f64>> = Vec::with_capacity(tools.len());
-    for (k, name) in TOOL_NAMES.iter().enumerate() {
-        let key = format!("tools.{name}.motion");
-        let Some(table) = &s.motions[k] else {
-            directions.push(default_direction(name));
+    let standard = tools.len() - s.extra_tools.len();
+    let mut directions = vec![Vector3::z(); tools.len()];
+    for slot in slots(s, standard) {
+        let key = &slot.key;
+        let Some(k) = slot.place else {
+            if slot.table.is_some() {
+                return Err(format!(
+                    "{key}: the scenario has no holder; give process.blank_holder_gap, where \
+                     the holder starts below the blank"
+                ));
+            }
             continue;
         };
-        if k >= tools.len() {
-            return Err(format!(
-                "{key}: the scenario has no holder; give process.blank_holder_gap, where the \
-                 holder starts below the blank"
-            ));
-        }
-        let motion = table.motion(&key, name, HOLDER_MASS_RATIO * blank_mass)?;
-        directions.push(match &motion {
+        directions[k] = slot.default;
+        let Some(table) = slot.table else { continue };
+        let motion = table.motion(key, slot.name, HOLDER_MASS_RATIO * blank_mass)?;
+        directions[k] = match &motion {
             Some(ToolMotion::Path(p)) => p.direction(),
             Some(ToolMotion::Force { force, .. }) => force.normalize(),
             _ => table
                 .direction
-                .map_or(default_direction(name), |d| Vector3::from(d).normalize()),
-        });
+                .map_or(slot.default, |d| Vector3::from(d).normalize()),
+        };
         if let Some(start) = table.start {
             if !start.is_finite() {
                 return Err(format!("{key}.start must be a finite number (mm)"));
@@ -96,24 +139,26 @@ pub fn apply_motions(
                 .map_err(|e| format!("{key}.start: {e}"))?;
         }
         let Some(motion) = motion else { continue };
-        if staged.contains(name) {
+        if staged.contains(&slot.name) {
             return Err(format!(
-                "{key} and process.stages both move the {name}: give one"
+                "{key} and process.stages both move the {}: give one",
+                slot.name
             ));
         }
-        if k == 2 && s.process.blank_holder_force > 0.0 {
+        if slot.name == "holder" && s.process.blank_holder_force > 0.0 {
             return Err(format!(
                 "{key}: process.blank_holder_force already drives the holder: give one"
             ));
         }
         tools[k].motion = motion;
     }
-    directions.truncate(tools.len());
     let mut spans = Vec::new();
     if !s.process.stages.is_empty() {
+        let names = tool_names(s, (standard > 2).then_some(2));
         let view = StagedTools {
             tools,
             directions: &directions,
+            names: &names,
         };
         let plan = stage_plan(&s.process.stages, &view, tools.len(), stack)?;
         spans = plan.stages;
@@ -157,13 +202,12 @@ pub fn apply_motions(
 struct StagedTools<'a> {
     tools: &'a [RigidTool],
     directions: &'a [Vector3<f64>],
+    names: &'a [String],
 }
 
 impl StageTools for StagedTools<'_> {
     fn index(&self, name: &str) -> Option<usize> {
-        TOOL_NAMES[..self.tools.len()]
-            .iter()
-            .position(|n| *n == name)
+        self.names.iter().position(|n| n == name)
     }
 
     fn direction(&self, tool: usize) -> Vector3<f64> {

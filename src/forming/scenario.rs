@@ -35,6 +35,8 @@ pub struct Scenario {
     pub motions: [Option<MotionTable>; 3],
     /// Springs, grippers and gravity.
     pub supports: SupportScenario,
+    /// Tools besides the punch, die and holder, their files resolved.
+    pub extra_tools: Vec<ExtraTool>,
 }
 
 /// The blank: one ply of one material card, or a layup of plies, either a rectangle meshed
@@ -808,6 +810,35 @@ pub struct ToolFiles {
     pub flange_radius: Option<f64>,
 }
 
+/// A tool besides the punch, die and holder (`[[tools.extra]]`): a surface from a file on one
+/// side of the blank, its friction and its motion.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ExtraTool {
+    pub name: String,
+    pub file: PathBuf,
+    pub element_set: Option<String>,
+    /// Coulomb friction with the blank.
+    pub friction: f64,
+    /// `"below"` (facing up, touching the first ply) or `"above"` (facing down, the last).
+    pub blank_side: String,
+    pub motion: Option<MotionTable>,
+}
+
+impl ExtraTool {
+    /// Whether it lies above the blank, `key` its table in messages.
+    pub fn above(&self, key: &str) -> Result<bool, String> {
+        match self.blank_side.as_str() {
+            "below" => Ok(false),
+            "above" => Ok(true),
+            other => Err(format!(
+                "{key}.blank_side = \"{other}\": \"below\" (the tool under the blank, facing \
+                 up) or \"above\""
+            )),
+        }
+    }
+}
+
 /// One tool's surface: a file and, for mesh files, optionally an element set of it.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -829,6 +860,8 @@ struct ToolsTable {
     resolution: Option<f64>,
     die_shape: Option<String>,
     part_depth: Option<f64>,
+    #[serde(default)]
+    extra: Vec<ExtraTool>,
     punch: Option<ToolTable>,
     die: Option<ToolTable>,
     holder: Option<ToolTable>,
@@ -915,6 +948,33 @@ impl ToolsTable {
             matched_depth: matched_depth(self.die_shape.as_deref(), self.part_depth)?,
             shape,
         }))
+    }
+
+    /// The extra tools, their files resolved against `folder`, names unique and new.
+    fn extra_tools(&self, folder: &Path) -> Result<Vec<ExtraTool>, String> {
+        let mut tools = self.extra.clone();
+        for (i, tool) in tools.iter_mut().enumerate() {
+            let key = format!("tools.extra[{}]", i + 1);
+            tool.above(&key)?;
+            FRICTION.check(&format!("{key}.friction"), tool.friction)?;
+            if ["punch", "die", "holder"].contains(&tool.name.as_str()) || tool.name.is_empty() {
+                return Err(format!(
+                    "{key}.name = \"{}\": give the tool a name of its own",
+                    tool.name
+                ));
+            }
+            tool.file = folder.join(&tool.file);
+        }
+        for (i, tool) in tools.iter().enumerate() {
+            if tools[..i].iter().any(|t| t.name == tool.name) {
+                return Err(format!(
+                    "tools.extra[{}].name = \"{}\": another extra tool has it",
+                    i + 1,
+                    tool.name
+                ));
+            }
+        }
+        Ok(tools)
     }
 
     /// The tools' `motion` tables (punch, die, holder).
@@ -1176,6 +1236,7 @@ impl Scenario {
         )
         .map_err(error)?;
         let motions = file.tools.motions();
+        let extra_tools = file.tools.extra_tools(folder).map_err(error)?;
         let scenario = Scenario {
             origin: origin.to_string(),
             blank: file
@@ -1185,6 +1246,7 @@ impl Scenario {
             boundary: file.boundary,
             tools: file.tools.resolve(folder).map_err(error)?,
             motions,
+            extra_tools,
             supports: SupportScenario {
                 springs: file.springs,
                 grippers: file.grippers,
@@ -1234,6 +1296,15 @@ impl Scenario {
             &["tools", "holder", "file"],
         ] {
             make_absolute(&mut table, keys, &folder);
+        }
+        let extras = table
+            .get_mut("tools")
+            .and_then(|t| t.get_mut("extra"))
+            .and_then(toml::Value::as_array_mut);
+        for extra in extras.into_iter().flatten() {
+            if let Some(extra) = extra.as_table_mut() {
+                make_absolute(extra, &["file"], &folder);
+            }
         }
         let plies = table
             .get_mut("blank")

@@ -191,11 +191,12 @@ impl FormingModel {
             ToolSet::BuiltIn(t) => built_in_tool_set(s, t, (thickness, reach), punch, blank_mass)?,
             ToolSet::Files(f) => file_tool_set(s, f, (thickness, blank_mass), punch, &mut notes)?,
         };
+        let above = push_extra_tools(s, &mut tools, thickness, &mut notes)?;
         let paths = apply_motions(s, &mut tools, thickness, blank_mass)
             .map_err(|e| format!("{}: {e}", s.origin))?;
-        let mut model = with_tools_on_the_outer_plies(model, tools);
-        let names = tool_names(holder_tool);
-        let index = |name: &str| names.iter().position(|n| *n == name);
+        let mut model = with_tools_on_the_outer_plies(model, tools, &above);
+        let names = tool_names(s, holder_tool);
+        let index = |name: &str| names.iter().position(|n| n == name);
         let supports = build_supports(&s.supports, &model, &index)
             .map_err(|e| format!("{}: {e}", s.origin))?;
         model = model.with_supports(supports);
@@ -209,7 +210,7 @@ impl FormingModel {
                 .map_err(|e| format!("{}: {e}", s.origin))?;
             model = model.with_heat(heat_model);
         }
-        if let ToolSet::Files(_) = s.tools {
+        if matches!(s.tools, ToolSet::Files(_)) || !s.extra_tools.is_empty() {
             check_start_positions(&model)?;
         }
         let (end_time, stroke, punch_path) = match &paths {
@@ -812,7 +813,7 @@ fn check_stroke(s: &Scenario, punch: &TriangleSurface, file: &Path) -> Result<()
 /// `model` with `tools`, the punch and holder below the blank touching its first ply (from the
 /// punch's side), the die above it the last: each tool's contact offset half the thickness of
 /// the ply next to it, the contact's reach the thinnest ply's.
-fn with_tools_on_the_outer_plies(model: Model, tools: Vec<RigidTool>) -> Model {
+fn with_tools_on_the_outer_plies(model: Model, tools: Vec<RigidTool>, above: &[usize]) -> Model {
     // a model has a ply at least (`Model::layup`)
     let thickness = |k: usize| model.plies[k].laminate.reference_thickness();
     let (first, last) = (thickness(0), thickness(model.plies.len() - 1));
@@ -821,9 +822,56 @@ fn with_tools_on_the_outer_plies(model: Model, tools: Vec<RigidTool>) -> Model {
         penalty_scale: PENALTY_SCALE,
         max_penetration: model.thinnest_ply(),
     };
-    model
+    let mut model = model
         .with_tools(tools, contact)
-        .with_tool_offset(DIE, 0.5 * last)
+        .with_tool_offset(DIE, 0.5 * last);
+    for &k in above {
+        model = model.with_tool_offset(k, 0.5 * last);
+    }
+    model
+}
+
+/// Appends `[[tools.extra]]` to `tools`, each read from its file and turned to face the blank
+/// from its side (what was noticed goes to `notes`); the places of those above the blank, which
+/// touch its last ply. Not in a non-isothermal run, whose tools have a temperature each.
+fn push_extra_tools(
+    s: &Scenario,
+    tools: &mut Vec<RigidTool>,
+    thickness: f64,
+    notes: &mut Vec<String>,
+) -> Result<Vec<usize>, String> {
+    if s.heat.is_some() && !s.extra_tools.is_empty() {
+        return Err(format!(
+            "{}: tools.extra in a non-isothermal run: an extra tool has no temperature of its \
+             own yet; run it isothermal, or give the tool's surface to the punch, die or holder",
+            s.origin
+        ));
+    }
+    let mut above = Vec::new();
+    for (i, extra) in s.extra_tools.iter().enumerate() {
+        let key = format!("tools.extra[{}]", i + 1);
+        let up = extra
+            .above(&key)
+            .map_err(|e| format!("{}: {e}", s.origin))?;
+        let side = if up { -Vector3::z() } else { Vector3::z() };
+        let file = ToolFile {
+            file: extra.file.clone(),
+            element_set: extra.element_set.clone(),
+        };
+        let surface = tool_surface(&extra.name, &file, &side, notes)?;
+        if up {
+            above.push(tools.len());
+        }
+        let tool = RigidTool::new(
+            &extra.name,
+            surface,
+            ToolMotion::Fixed,
+            extra.friction,
+            thickness,
+        )?;
+        tools.push(tool.with_blended_surface());
+    }
+    Ok(above)
 }
 
 /// No blank node may start inside a tool: the first contact force would fling it out.
