@@ -232,9 +232,10 @@ impl FormingModel {
             damping: 0.0,
             yarn_damping: 0.06,
         };
-        let max_increment = match p.max_increment {
-            Some(travel) => travel / punch.speed,
-            None => end_time / implicit::DEFAULT_INCREMENTS,
+        let max_increment = match (p.max_increment, &paths) {
+            (Some(travel), _) => travel / punch.speed,
+            (None, None) => p.stroke / implicit::DEFAULT_INCREMENTS / punch.speed,
+            (None, Some(_)) => end_time / implicit::DEFAULT_INCREMENTS,
         };
         let estimate = match p.solver {
             SolverKind::Explicit => preflight::check_model(s, &model, &settings, punch.speed)?,
