@@ -2,7 +2,8 @@
 //! cut so that the formed part covers a trim line with a margin (`forming::outline`), with a
 //! line per iteration and a summary.
 
-use super::shared::{print_table, take_output_folder, with_threads, Bar, Interrupt, Watch};
+use super::forming_run::watched_run;
+use super::shared::{print_table, take_output_folder, with_threads, Interrupt};
 use crate::forming::outline::iterate::{outline_csv_name, write_outline_csv, HISTORY_CSV};
 use crate::forming::outline::{
     iterate, polygon, read_trim_csv, trim_circle, IterationRecord, OutlineResult, OutlineSettings,
@@ -195,13 +196,7 @@ fn forming_run(
     }
     let _lock = take_output_folder(folder, &products())?;
     let output = live_output(folder, s, &forming)?;
-    let mut bar = Bar::new(forming.settings.end_time);
-    let mut watch = Watch {
-        bar: &mut bar,
-        stop,
-    };
-    let result = crate::forming::run::run(&forming, Some(output), Some(&mut watch));
-    bar.finish();
+    let result = watched_run(&forming, output, stop);
     if !result.records.is_empty() {
         write_final_results(folder, s, &forming, &result)?;
     }

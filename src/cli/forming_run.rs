@@ -5,6 +5,7 @@ use super::shared::{
     print_checked_table, status_row, take_output_folder, with_threads, Bar, Interrupt,
     ScenarioArgs, Watch,
 };
+use crate::experiment::sheet_test::LiveOutput;
 use crate::forming::advice::stop_advice;
 use crate::forming::output::{live_output, products, write_final_results};
 use crate::forming::preflight::implicit_advice;
@@ -15,6 +16,7 @@ use crate::solver::estimate::RunEstimate;
 use crate::solver::SolverKind;
 use crate::thermal::blank::FieldExtremes;
 use std::path::PathBuf;
+use std::sync::atomic::AtomicBool;
 
 #[derive(clap::Args, Debug)]
 #[command(after_help = super::shared::SCENARIO_REFERENCE)]
@@ -66,13 +68,7 @@ fn forming(args: &Args) -> anyhow::Result<()> {
     if let Some(advice) = implicit_advice(&scenario, &forming.estimate) {
         eprintln!("note: {advice}");
     }
-    let mut bar = Bar::new(forming.settings.end_time);
-    let mut watch = Watch {
-        bar: &mut bar,
-        stop,
-    };
-    let result = crate::forming::run::run(&forming, Some(output), Some(&mut watch));
-    bar.finish();
+    let result = watched_run(&forming, output, stop);
     if result.records.is_empty() {
         return result.outcome.map(|_| ()).map_err(anyhow::Error::from);
     }
@@ -93,6 +89,23 @@ fn forming(args: &Args) -> anyhow::Result<()> {
         eprintln!("{advice}");
     }
     result.outcome.map(|_| ()).map_err(anyhow::Error::from)
+}
+
+/// The forming run of `forming` writing `output` as it goes, with a progress bar, stopped
+/// when `stop` is raised (Ctrl-C): what `thermostamp run` and `blank-outline` both run.
+pub(super) fn watched_run(
+    forming: &FormingModel,
+    output: LiveOutput<'_, FormingRecord>,
+    stop: &AtomicBool,
+) -> FormingRun {
+    let mut bar = Bar::new(forming.settings.end_time);
+    let mut watch = Watch {
+        bar: &mut bar,
+        stop,
+    };
+    let result = crate::forming::run::run(forming, Some(output), Some(&mut watch));
+    bar.finish();
+    result
 }
 
 /// A flange measure, or why there is none (tools from files without `tools.flange_radius`).

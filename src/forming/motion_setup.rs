@@ -87,12 +87,13 @@ pub fn planned_stroke(s: &Scenario, t: &Tools) -> f64 {
     }
 }
 
-/// Gives `tools` (punch, die, holder where there is one) the motions of their `motion` tables
-/// and of the stages, `stack` the blank's thickness; the plan where the punch moves along a
-/// path rather than the single stroke.
+/// Gives `tools` (punch, die, holder where there is one, the extras; their scenario names
+/// `names`, [`tool_names`]) the motions of their `motion` tables and of the stages, `stack` the
+/// blank's thickness; the plan where the punch moves along a path rather than the single
+/// stroke.
 pub fn apply_motions(
     s: &Scenario,
-    tools: &mut [RigidTool],
+    (tools, names): (&mut [RigidTool], &[String]),
     stack: f64,
     blank_mass: f64,
 ) -> Result<Option<MotionPlan>, String> {
@@ -154,11 +155,10 @@ pub fn apply_motions(
     }
     let mut spans = Vec::new();
     if !s.process.stages.is_empty() {
-        let names = tool_names(s, (standard > 2).then_some(2));
         let view = StagedTools {
             tools,
             directions: &directions,
-            names: &names,
+            names,
         };
         let plan = stage_plan(&s.process.stages, &view, tools.len(), stack)?;
         spans = plan.stages;

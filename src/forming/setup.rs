@@ -192,10 +192,10 @@ impl FormingModel {
             ToolSet::Files(f) => file_tool_set(s, f, (thickness, blank_mass), punch, &mut notes)?,
         };
         let above = push_extra_tools(s, &mut tools, thickness, &mut notes)?;
-        let paths = apply_motions(s, &mut tools, thickness, blank_mass)
+        let names = tool_names(s, holder_tool);
+        let paths = apply_motions(s, (&mut tools, &names), thickness, blank_mass)
             .map_err(|e| format!("{}: {e}", s.origin))?;
         let mut model = with_tools_on_the_outer_plies(model, tools, &above);
-        let names = tool_names(s, holder_tool);
         let index = |name: &str| names.iter().position(|n| n == name);
         let supports = build_supports(&s.supports, &model, &index)
             .map_err(|e| format!("{}: {e}", s.origin))?;
